@@ -1,0 +1,24 @@
+"""Angle wrapping helpers (radians), for scalars and numpy arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+_TWO_PI = 2.0 * np.pi
+
+
+def wrap_pi(a: ArrayLike) -> np.ndarray | float:
+    """Wrap angles to [-pi, pi); a scalar in gives a float out."""
+    w = np.mod(np.asarray(a, dtype=float) + np.pi, _TWO_PI)
+    # np.mod can round a tiny negative input up to exactly 2pi.
+    w = np.where(w >= _TWO_PI, 0.0, w) - np.pi
+    return float(w) if w.ndim == 0 else w
+
+
+def wrap_2pi(a: ArrayLike) -> np.ndarray | float:
+    """Wrap angles to [0, 2pi); a scalar in gives a float out."""
+    w = np.mod(np.asarray(a, dtype=float), _TWO_PI)
+    # np.mod can round a tiny negative input up to exactly 2pi.
+    w = np.where(w >= _TWO_PI, 0.0, w)
+    return float(w) if w.ndim == 0 else w
