@@ -1,0 +1,74 @@
+"""``pfusion``: one command line for every service and tool.
+
+Each command lives in a module with ``add_arguments(parser)`` and ``main(args) -> int``;
+the module is imported only when its command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from common.config import ConfigError, Config, ZenohConfig, load
+
+COMMANDS: dict[str, tuple[str, str]] = {
+    "router": ("services.router.main", "run a Zenoh router (Python, no zenohd needed)"),
+    "simulate": ("services.simulator.main", "publish a scenario's plots, detections, truth"),
+    "watch": ("services.watch.main", "print decoded messages of a key expression live"),
+    "demo": ("services.demo.main", "run the built-in scenario end to end and summarise"),
+}
+
+
+def add_common(p: argparse.ArgumentParser, config_required: bool = True) -> None:
+    """--config, --connect and --log-level, shared by every service."""
+    p.add_argument("--config", required=config_required, help="deployment TOML file")
+    p.add_argument(
+        "--connect", action="append", default=None,
+        help="Zenoh endpoint to connect to, e.g. tcp/127.0.0.1:7447 (overrides [zenoh])",
+    )
+
+
+def load_config(args: argparse.Namespace) -> Config:
+    """The deployment config of ``args``, with --connect applied."""
+    cfg = load(args.config) if args.config else _empty_config()
+    if args.connect:
+        z = cfg.zenoh
+        cfg = Config(ZenohConfig(args.connect, [], z.root), cfg.bases, cfg.arrays, cfg.doc, cfg.path)
+    return cfg
+
+
+def _empty_config() -> Config:
+    from common.config import parse
+
+    return parse({})
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="pfusion", description=__doc__.splitlines()[0])
+    parser.add_argument("--log-level", default="INFO", help="DEBUG, INFO, WARNING, ERROR")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (_, help_) in COMMANDS.items():
+        sub.add_parser(name, help=help_, add_help=False)
+    pre, rest = parser.parse_known_args(argv)
+    module = importlib.import_module(COMMANDS[pre.command][0])
+    cmd = argparse.ArgumentParser(prog=f"pfusion {pre.command}", description=COMMANDS[pre.command][1])
+    module.add_arguments(cmd)
+    args = cmd.parse_args(rest)
+    logging.basicConfig(
+        level=pre.log_level.upper(),
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+        stream=sys.stderr,
+    )
+    try:
+        return int(module.main(args) or 0)
+    except ConfigError as e:
+        print(f"pfusion {pre.command}: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

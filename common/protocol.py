@@ -1,0 +1,246 @@
+"""Wire protocol v1: msgpack maps with ``v`` = 1 and ``t``, columnar plot lists.
+
+Every message type has a schema (a dict of field name -> :class:`Field`); :func:`decode`
+checks a payload against it strictly (types, equal column lengths, finite values,
+sigmas > 0, angles in [0, 2pi]) and raises :class:`DecodeError` naming the field.
+Decoded float columns are numpy float64 arrays, int columns int64 arrays. Fields a schema
+does not name are ignored, so a v1 reader accepts additive changes. docs/protocol.md is
+the human-readable version of the schemas below.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import msgpack
+import numpy as np
+
+VERSION = 1
+TWO_PI = 2.0 * math.pi
+MAX_PAYLOAD = 16 * 1024 * 1024
+
+
+class DecodeError(ValueError):
+    """A payload that does not match its schema; ``field`` names the culprit."""
+
+    def __init__(self, field: str, reason: str) -> None:
+        super().__init__(f"{field}: {reason}")
+        self.field = field
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class Field:
+    """Schema of one field.
+
+    kind: float | int | str | bool | floats | ints | strs | map | maps | pairs.
+    ``column`` groups list fields that must have equal lengths; ``length`` fixes the
+    length of a list; ``sub`` is the schema of a nested map (map / maps).
+    """
+
+    kind: str
+    optional: bool = False
+    positive: bool = False
+    nonneg: bool = False
+    angle: bool = False
+    column: str | None = None
+    length: int | None = None
+    choices: tuple[str, ...] | None = None
+    sub: dict[str, "Field"] | None = None
+
+
+def _col(kind: str = "floats", **kw: Any) -> Field:
+    return Field(kind, column="n", **kw)
+
+
+V = Field("int")
+T = Field("float", nonneg=True)
+SEQ = Field("int", nonneg=True)
+ID = Field("str")
+TRACK_STATUS = ("tentative", "confirmed", "coasting")
+
+OWN_SHIP = {
+    "x": Field("float"),
+    "y": Field("float"),
+    "heading": Field("float", angle=True),
+    "speed": Field("float", nonneg=True),
+}
+
+PLOTS = {
+    "v": V, "t": T, "seq": SEQ, "base": ID, "channel": ID,
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "snr": _col(optional=True),
+}
+FUSED = {
+    "v": V, "t": T, "base": ID,
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "n_ch": _col("ints", positive=True),
+}
+ETRACK = {
+    "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
+    "x": Field("floats", length=5), "P": Field("floats", length=25),
+    "score": Field("float"), "n_ch": Field("int", nonneg=True),
+    "updated": Field("bool"), "ambiguous": Field("bool"),
+}
+ETRACKS = {"v": V, "t": T, "base": ID, "tracks": Field("maps", sub=ETRACK)}
+GTRACK = {
+    "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
+    "x": Field("floats", length=6), "P": Field("floats", length=36),
+    "score": Field("float"), "etracks": Field("pairs"), "ambiguous": Field("bool"),
+}
+GTRACKS = {"v": V, "t": T, "tracks": Field("maps", sub=GTRACK)}
+DETECTIONS = {
+    "v": V, "t": T, "seq": SEQ, "array": ID, "own": Field("map", sub=OWN_SHIP),
+    "brg": _col(angle=True), "amp": _col(), "sbrg": _col(optional=True, positive=True),
+    "freq": _col(optional=True, positive=True),
+}
+TRUTH_RADAR = {
+    "v": V, "t": T, "id": _col("ints", nonneg=True),
+    "x": _col(), "y": _col(), "z": _col(), "vx": _col(), "vy": _col(), "vz": _col(),
+}
+TRUTH_SONAR = {
+    "v": V, "t": T, "array": ID, "own": Field("map", sub=OWN_SHIP),
+    "id": _col("ints", nonneg=True), "x": _col(), "y": _col(), "vx": _col(), "vy": _col(),
+    "brg": _col(angle=True),
+}
+SIM_STATUS = {"v": V, "t": T, "state": Field("str", choices=("running", "done")),
+              "scans": Field("int", nonneg=True), "published": Field("int", nonneg=True)}
+
+SCHEMAS: dict[str, dict[str, Field]] = {
+    "plots": PLOTS, "fused": FUSED, "etracks": ETRACKS, "gtracks": GTRACKS,
+    "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
+    "sim_status": SIM_STATUS,
+}
+
+
+def _np_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"cannot encode {type(obj).__name__}")
+
+
+def encode(msg: dict[str, Any]) -> bytes:
+    """msgpack-encode a message map (numpy arrays and scalars become lists / numbers)."""
+    return msgpack.packb(msg, default=_np_default, use_bin_type=True)
+
+
+def unpack(payload: bytes) -> dict[str, Any]:
+    """msgpack-decode ``payload`` into a map with string keys, or raise DecodeError."""
+    if not isinstance(payload, (bytes, bytearray, memoryview)):
+        raise DecodeError("<payload>", f"expected bytes, got {type(payload).__name__}")
+    if len(payload) > MAX_PAYLOAD:
+        raise DecodeError("<payload>", f"{len(payload)} bytes exceeds {MAX_PAYLOAD}")
+    try:
+        obj = msgpack.unpackb(bytes(payload), raw=False, strict_map_key=False)
+    except Exception as e:  # msgpack raises many types on hostile input
+        raise DecodeError("<payload>", f"not msgpack ({type(e).__name__}: {e})") from None
+    if not isinstance(obj, dict):
+        raise DecodeError("<payload>", f"expected a map, got {type(obj).__name__}")
+    return obj
+
+
+def decode(kind: str, payload: bytes) -> dict[str, Any]:
+    """Unpack and validate a payload of message type ``kind`` (a key of SCHEMAS)."""
+    msg = validate(SCHEMAS[kind], unpack(payload), "")
+    if msg["v"] != VERSION:
+        raise DecodeError("v", f"unsupported protocol version {msg['v']}")
+    return msg
+
+
+def validate(schema: dict[str, Field], obj: Any, path: str) -> dict[str, Any]:
+    """Check map ``obj`` against ``schema``; return it with lists as numpy arrays."""
+    if not isinstance(obj, dict):
+        raise DecodeError(path or "<payload>", f"expected a map, got {type(obj).__name__}")
+    out: dict[str, Any] = {}
+    lengths: dict[str, tuple[str, int]] = {}
+    for name, f in schema.items():
+        where = f"{path}.{name}" if path else name
+        if name not in obj:
+            if f.optional:
+                continue
+            raise DecodeError(where, "missing")
+        value = _check(f, obj[name], where)
+        if f.column is not None:
+            n = len(value)
+            if f.column in lengths and lengths[f.column][1] != n:
+                other, m = lengths[f.column]
+                raise DecodeError(where, f"length {n} differs from {other} length {m}")
+            lengths.setdefault(f.column, (where, n))
+        out[name] = value
+    return out
+
+
+def _number(v: Any, where: str, integer: bool) -> float | int:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise DecodeError(where, f"expected a number, got {type(v).__name__}")
+    if integer and not isinstance(v, int):
+        raise DecodeError(where, "expected an integer")
+    if not integer and not math.isfinite(v):
+        raise DecodeError(where, f"not finite ({v})")
+    return v
+
+
+def _range(f: Field, a: np.ndarray, where: str) -> None:
+    if f.positive and np.any(a <= 0):
+        raise DecodeError(where, "must be > 0")
+    if f.nonneg and np.any(a < 0):
+        raise DecodeError(where, "must be >= 0")
+    if f.angle and np.any((a < 0) | (a > TWO_PI)):
+        raise DecodeError(where, "angle must be in [0, 2pi] radians")
+
+
+def _check(f: Field, v: Any, where: str) -> Any:
+    k = f.kind
+    if k in ("float", "int"):
+        x = _number(v, where, k == "int")
+        if k == "int" and abs(x) > 2**62:
+            raise DecodeError(where, "integer out of range")
+        _range(f, np.asarray([x], dtype=float), where)
+        return float(x) if k == "float" else int(x)
+    if k == "bool":
+        if not isinstance(v, bool):
+            raise DecodeError(where, f"expected a bool, got {type(v).__name__}")
+        return v
+    if k == "str":
+        if not isinstance(v, str) or not v:
+            raise DecodeError(where, "expected a non-empty string")
+        if f.choices is not None and v not in f.choices:
+            raise DecodeError(where, f"'{v}' is not one of {f.choices}")
+        return v
+    if k == "map":
+        return validate(f.sub or {}, v, where)
+    if not isinstance(v, (list, tuple)):
+        raise DecodeError(where, f"expected a list, got {type(v).__name__}")
+    if f.length is not None and len(v) != f.length:
+        raise DecodeError(where, f"expected {f.length} elements, got {len(v)}")
+    if k == "maps":
+        return [validate(f.sub or {}, item, f"{where}[{i}]") for i, item in enumerate(v)]
+    if k == "pairs":
+        return [_pair(item, f"{where}[{i}]") for i, item in enumerate(v)]
+    if k == "strs":
+        for i, s in enumerate(v):
+            _check(Field("str"), s, f"{where}[{i}]")
+        return list(v)
+    integer = k == "ints"
+    for i, x in enumerate(v):
+        _number(x, f"{where}[{i}]", integer)
+    if integer and any(abs(x) > 2**62 for x in v):
+        raise DecodeError(where, "integer out of range")
+    a = np.asarray(v, dtype=np.int64 if integer else np.float64)
+    _range(f, a, where)
+    return a
+
+
+def _pair(item: Any, where: str) -> tuple[str, int]:
+    """A (base id, elementary track id) reference of a global track."""
+    if not isinstance(item, (list, tuple)) or len(item) != 2:
+        raise DecodeError(where, "expected [base, id]")
+    base = _check(Field("str"), item[0], where + "[0]")
+    tid = _check(Field("int", nonneg=True), item[1], where + "[1]")
+    return base, tid
