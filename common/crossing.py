@@ -143,7 +143,10 @@ def eq13_ambiguous(
     epsilon: float,
     angle_idx: Sequence[int] = (),
 ) -> np.ndarray:
-    """Ambiguity flags (N,) bool: NOT ambiguous iff sum_j q^j g(Z^k - Z^j) < eps r^k (004 eq. 13)."""
+    """Ambiguity flags (N,) bool; k is NOT ambiguous iff sum_j q^j g(Z^k - Z^j) < eps r^k.
+
+    004 eq. 13, with Z the predictions at t_l and r from `far_density`.
+    """
     lhs = neighbour_sum(z_pred, z_pred, cov, q, angle_idx)
     return ~(lhs < epsilon * far_density(q, volume))  # 004 eq. 13
 
@@ -151,10 +154,10 @@ def eq13_ambiguous(
 def supnorm_ambiguous(
     z_pred: np.ndarray, cov: ArrayLike, S: float, angle_idx: Sequence[int] = ()
 ) -> np.ndarray:
-    """Ambiguity flags (N,) bool: NOT ambiguous iff sup_p |Z^k_p - Z^j_p| / sigma_p > S for all j != k.
+    """Ambiguity flags (N,) bool; k is NOT ambiguous iff ||Z^k - Z^j|| > S for all j != k.
 
-    sigma_p is the standard deviation of component p in the density g of track j (004,
-    sup-norm alternative to eq. 13).
+    ||X|| = sup_p |x_p| / sigma_p, sigma_p the standard deviation of component p in the
+    density g of track j (004, sup-norm alternative to eq. 13).
     """
     n, m = z_pred.shape
     sigma = np.sqrt(np.diagonal(_broadcast_cov(cov, n, m), axis1=1, axis2=2))

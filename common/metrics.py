@@ -2,7 +2,7 @@
 
 GOSPA with alpha = 2 (Rahmathullah, Garcia-Fernandez, Svensson, 2017), per time step,
 for truths X (n, d) and estimates Y (m, d), Euclidean base distance, cutoff c, order p:
-    d^p = min_gamma [ sum_{(i,j) in gamma} d(x_i, y_j)^p + c^p/2 (n - |gamma|) + c^p/2 (m - |gamma|) ]
+    d^p = min_gamma [ sum_{(i,j) in gamma} d(x_i, y_j)^p + c^p/2 (n + m - 2 |gamma|) ]
 over partial assignments gamma whose pairs satisfy d < c. The decomposition is given in
 p-th power units: localisation = sum d^p over assigned pairs, missed = c^p/2 per missed
 truth, false = c^p/2 per false estimate; distance = (their sum)^(1/p).
