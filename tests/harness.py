@@ -1,0 +1,116 @@
+"""Multi-process test harness: a real ``pfusion router`` on a free loopback port, real
+services as child processes, and an in-process collector of decoded messages."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from common import protocol
+from common.bus import Inbox, open_session
+from common.config import ZenohConfig
+from common.procs import Child, start_router
+from services.watch.main import kind_of
+
+ROOT = "pf/v1"
+REPO = Path(__file__).resolve().parents[1]
+SCENARIOS = REPO / "scenarios"
+
+
+class Deployment:
+    """Router + children + collector; stops everything on exit and prints child logs
+    of a failed test (pytest shows them)."""
+
+    def __init__(self, logdir: Path) -> None:
+        self.logdir = logdir
+        self.router, self.endpoint = start_router(log=logdir / "router.log")
+        self.children: list[Child] = []
+        self.session = open_session(ZenohConfig([self.endpoint], [], ROOT))
+        self.inbox = Inbox()
+        self.messages: list[tuple[str, dict[str, Any]]] = []
+        self._subs: list[Any] = []
+        self._token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
+
+    def __enter__(self) -> "Deployment":
+        return self
+
+    def __exit__(self, exc_type: type | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        for c in reversed(self.children):
+            c.stop()
+        for s in self._subs:
+            s.undeclare()
+        self._token.undeclare()
+        self.session.close()
+        self.router.stop()
+        if exc is not None:
+            for log in sorted(self.logdir.glob("*.log")):
+                print(f"==== {log.name} (last 40 lines) ====")
+                print("\n".join(log.read_text(errors="replace").splitlines()[-40:]))
+
+    def start(self, name: str, *args: str) -> Child:
+        """Start ``pfusion ARGS --connect <router>``; stderr goes to <logdir>/<name>.log."""
+        child = Child(name, *args, "--connect", self.endpoint, log=self.logdir / f"{name}.log")
+        self.children.append(child)
+        return child
+
+    def collect(self, keyexpr: str) -> None:
+        """Subscribe the collector to root/keyexpr (before the data starts)."""
+        self._subs.append(self.session.declare_subscriber(f"{ROOT}/{keyexpr}", self.inbox.on_sample))
+
+    def wait_alive(self, names: list[str], timeout: float = 60.0) -> None:
+        """Block until every root/alive/<name> token exists (a service is subscribed)."""
+        deadline = time.monotonic() + timeout
+        for name in names:
+            while not any(r.ok for r in self.session.liveliness().get(f"{ROOT}/alive/{name}", timeout=1.0)):
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"{name} not alive; see logs in {self.logdir}")
+                for c in self.children:
+                    if not c.alive():
+                        raise RuntimeError(f"{c.name} exited with {c.proc.returncode}")
+                time.sleep(0.1)
+
+    def simulate(self, scenario: Path, seed: int = 1, scans: int | None = None,
+                 wait_alive: list[str] = (), timeout: float = 300.0) -> Child:
+        """Run the simulator to completion (waiting for ``wait_alive`` services first)."""
+        args = ["simulate", "--config", str(scenario), "--scenario", str(scenario),
+                "--seed", str(seed), "--wait-alive", "test/collector"]
+        for name in wait_alive:
+            args += ["--wait-alive", name]
+        if scans is not None:
+            args += ["--scans", str(scans)]
+        sim = self.start("simulate", *args)
+        deadline = time.monotonic() + timeout
+        while sim.alive():
+            self.drain()
+            if time.monotonic() > deadline:
+                raise TimeoutError("simulator did not finish")
+            time.sleep(0.05)
+        assert sim.proc.returncode == 0, f"simulator exited with {sim.proc.returncode}"
+        return sim
+
+    def drain(self) -> None:
+        """Decode everything received so far into ``messages`` (raises on invalid data)."""
+        while (env := self.inbox.get(0.0)) is not None:
+            kind = kind_of(env.key, ROOT)
+            msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
+            self.messages.append((env.key, msg))
+
+    def wait_for(self, predicate: Callable[[], bool], timeout: float = 60.0) -> None:
+        """Drain until ``predicate()`` holds (e.g. the last scan's tracks arrived)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            self.drain()
+            if predicate():
+                return
+            if time.monotonic() > deadline:
+                raise TimeoutError("condition not met; see logs in " + str(self.logdir))
+            time.sleep(0.05)
+
+    def of(self, key_suffix: str) -> list[dict[str, Any]]:
+        """Decoded messages received on root/key_suffix, in arrival order."""
+        full = f"{ROOT}/{key_suffix}"
+        return [m for k, m in self.messages if k == full]
