@@ -10,9 +10,16 @@ _TWO_PI = 2.0 * np.pi
 
 def wrap_pi(a: ArrayLike) -> np.ndarray | float:
     """Wrap angles to [-pi, pi); a scalar in gives a float out."""
-    w = np.mod(np.asarray(a, dtype=float) + np.pi, _TWO_PI)
-    # np.mod can round a tiny negative input up to exactly 2pi.
-    w = np.where(w >= _TWO_PI, 0.0, w) - np.pi
+    a = np.asarray(a, dtype=float)
+    # a - 2pi floor((a + pi) / 2pi), in place: several times faster than np.mod on large
+    # arrays; the two corrections catch results that rounding leaves on or past a bound.
+    w = np.add(a, np.pi, out=np.empty_like(a))
+    w /= _TWO_PI
+    np.floor(w, out=w)
+    w *= -_TWO_PI
+    w += a
+    w[w >= np.pi] -= _TWO_PI
+    w[w < -np.pi] += _TWO_PI
     return float(w) if w.ndim == 0 else w
 
 
