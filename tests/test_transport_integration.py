@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections import defaultdict
 from pathlib import Path
 
+from common.config import load
 from harness import SCENARIOS, Deployment
 
 SCANS = 1000
@@ -24,7 +25,9 @@ def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None
     assert status["scans"] == SCANS
     assert len(data) == status["published"], "messages lost between simulator and subscriber"
     plot_keys = [k for k in seqs if "/radar/plots/" in k]
-    assert len(plot_keys) == 4 * 6
+    cfg = load(SCENARIOS / "dense.toml")
+    assert len(cfg.bases) == 4
+    assert len(plot_keys) == sum(len(b.channels) for b in cfg.bases)
     for key, s in seqs.items():
         assert s == list(range(len(s))), f"{key}: out of order or gaps"
     assert all(len(seqs[k]) == SCANS for k in plot_keys)

@@ -4,6 +4,7 @@ in scenario time, as fast as possible or at ``--speed`` times real time."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 import signal
 import threading
@@ -27,7 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--speed", type=float, default=0.0,
                    help="times real time; 0 (default) publishes as fast as possible")
-    p.add_argument("--scans", type=int, default=None, help="stop after this many scans")
+    p.add_argument("--scans", type=int, default=None,
+                   help="number of scans (extends the scenario's duration if needed)")
     p.add_argument("--wait-alive", action="append", default=[], metavar="SERVICE/INSTANCE",
                    help="wait until this service's liveliness token exists (repeatable)")
     p.add_argument("--wait-timeout", type=float, default=60.0)
@@ -56,6 +58,9 @@ def main(args: argparse.Namespace) -> int:
     except (OSError, tomllib.TOMLDecodeError, ValueError) as e:
         log.error("scenario %s: %s", path, e)
         return 2
+    if args.scans:
+        period = min(s.scan_period for s in (scn.radar, scn.sonar) if s is not None)
+        scn = dataclasses.replace(scn, duration=max(scn.duration, args.scans * period))
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
