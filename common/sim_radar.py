@@ -44,11 +44,12 @@ def radar_plots(
         snr = ch.snr_db - 20.0 * np.log10(r_t * r_r / radar.snr_ref_range**2)
     snr = np.maximum(snr + radar.snr_sigma_db * noise[:, 3], radar.snr_threshold_db)
     k = rng.poisson(ch.clutter)
+    vb_max, thr = radar.vb_max, radar.snr_threshold_db
     out = {
         "rb": np.concatenate([rb + ch.srb * noise[:, 0], rng.uniform(0.0, radar.rb_max, k)]),
-        "vb": np.concatenate([vb + ch.svb * noise[:, 1], rng.uniform(-radar.vb_max, radar.vb_max, k)]),
+        "vb": np.concatenate([vb + ch.svb * noise[:, 1], rng.uniform(-vb_max, vb_max, k)]),
         "az": np.concatenate([az + ch.saz * noise[:, 2], rng.uniform(0.0, TWO_PI, k)]),
-        "snr": np.concatenate([snr, radar.snr_threshold_db + rng.exponential(radar.clutter_snr_db, k)]),
+        "snr": np.concatenate([snr, thr + rng.exponential(radar.clutter_snr_db, k)]),
     }
     keep = np.concatenate([det, np.ones(k, dtype=bool)])
     order = rng.permutation(int(keep.sum()))

@@ -14,7 +14,7 @@ constant speed (coordinated turn), climbing at a constant ``vz``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -187,7 +187,6 @@ class Scenario:
     radar: RadarSim | None = None
     sonar: SonarSim | None = None
     name: str = ""
-    doc: dict[str, Any] = field(default_factory=dict, repr=False)
 
 
 # ---------------------------------------------------------------- parsing helpers
@@ -198,7 +197,8 @@ def _table(v: Any, key: str, allowed: set[str]) -> dict[str, Any]:
         raise ConfigError(key, "expected a table")
     unknown = set(v) - allowed
     if unknown:
-        raise ConfigError(f"{key}.{sorted(unknown)[0]}", f"unknown key (known: {', '.join(sorted(allowed))})")
+        known = ", ".join(sorted(allowed))
+        raise ConfigError(f"{key}.{sorted(unknown)[0]}", f"unknown key (known: {known})")
     return v
 
 
@@ -257,14 +257,16 @@ def _leg(t: Any, key: str, t_min: float) -> Leg:
     )
 
 
-_MOVER_KEYS = {"id", "pos", "vel", "course_deg", "speed", "vz", "t_on", "t_off", "leg"}
+_AIR_KEYS = {"id", "pos", "vel", "course_deg", "speed", "vz", "t_on", "t_off", "leg"}
+_SEA_KEYS = _AIR_KEYS - {"vz"} | {"sl_db", "lines_hz"}
+_OWN_KEYS = _AIR_KEYS - {"vz", "id", "t_on", "t_off"}
 
 
-def _mover(t: Any, key: str, extra: set[str] = frozenset(), dims: tuple[int, ...] = (3,),
-           need_id: bool = True) -> tuple[Mover, dict[str, Any]]:
-    t = _table(t, key, _MOVER_KEYS | extra)
+def _mover(t: Any, key: str, allowed: set[str], dims: tuple[int, ...]) -> tuple[Mover, dict[str, Any]]:
+    """A mover from its table; 2-D movers (dims (2,)) stay at z = 0."""
+    t = _table(t, key, allowed)
     mid = 0
-    if need_id:
+    if "id" in allowed:
         mid = t.get("id")
         if not isinstance(mid, int) or isinstance(mid, bool) or mid < 0:
             raise ConfigError(f"{key}.id", "must be an integer >= 0")
@@ -319,9 +321,14 @@ def _radar(t: Any, period: float) -> RadarSim:
     t = _table(t, key, _RCH_KEYS | win)
     default = _radar_channel(t, key, RadarChannelSim())
     chans_raw = _table(t.get("channel", {}), f"{key}.channel", set(t.get("channel", {})))
-    chans = {c: _radar_channel(_table(v, f"{key}.channel.{c}", _RCH_KEYS), f"{key}.channel.{c}", default)
-             for c, v in chans_raw.items()}
-    targets = [_mover(m, f"{key}.target[{i}]")[0] for i, m in enumerate(_list(t, "target", key))]
+    chans = {
+        c: _radar_channel(_table(v, f"{key}.channel.{c}", _RCH_KEYS), f"{key}.channel.{c}", default)
+        for c, v in chans_raw.items()
+    }
+    targets = [
+        _mover(m, f"{key}.target[{i}]", _AIR_KEYS, (3,))[0]
+        for i, m in enumerate(_list(t, "target", key))
+    ]
     _unique_ids(targets, f"{key}.target")
     return RadarSim(
         default, chans, targets, period,
@@ -381,11 +388,11 @@ def _sonar(t: Any, period: float) -> SonarSim:
               for a, v in arr_raw.items()}
     if "own" not in t:
         raise ConfigError(f"{key}.own", "missing")
-    own, _ = _mover(t["own"], f"{key}.own", dims=(2,), need_id=False)
+    own, _ = _mover(t["own"], f"{key}.own", _OWN_KEYS, (2,))
     targets = []
     for i, m in enumerate(_list(t, "target", key)):
         k = f"{key}.target[{i}]"
-        mv, raw = _mover(m, k, {"sl_db", "lines_hz"}, dims=(2,))
+        mv, raw = _mover(m, k, _SEA_KEYS, (2,))
         lines = raw.get("lines_hz", [])
         if not isinstance(lines, list) or not all(
             isinstance(f, (int, float)) and not isinstance(f, bool) and f > 0 for f in lines
@@ -424,4 +431,4 @@ def load_scenario(doc: dict[str, Any]) -> Scenario:
     sonar = _sonar(s["sonar"], period) if "sonar" in s else None
     if radar is None and sonar is None:
         raise ConfigError(key, "needs [sim.radar] and/or [sim.sonar]")
-    return Scenario(duration, radar, sonar, name, doc)
+    return Scenario(duration, radar, sonar, name)

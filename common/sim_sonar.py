@@ -67,11 +67,13 @@ def sonar_detections(
     snr = targets_sl_db[idx] - tl - a.nl_db + a.di_db + a.sigma_amp_db * rng.standard_normal(n)
     det = (rng.random(n) < a.pd) & (snr >= a.snr_threshold_db)
     amp = 10.0 ** (snr / 10.0)
-    b = wrap_angle(brg[idx] + bearing_sigma(brg[idx], amp, heading, array, a) * rng.standard_normal(n))
+    sigma = bearing_sigma(brg[idx], amp, heading, array, a)
+    b = wrap_angle(brg[idx] + sigma * rng.standard_normal(n))
     k = rng.poisson(a.clutter)
+    clutter_snr = a.snr_threshold_db + rng.exponential(a.clutter_snr_db, k)
     out = {
         "brg": np.concatenate([b, rng.uniform(0.0, TWO_PI, k)]),
-        "amp": np.concatenate([amp, 10.0 ** ((a.snr_threshold_db + rng.exponential(a.clutter_snr_db, k)) / 10.0)]),
+        "amp": np.concatenate([amp, 10.0 ** (clutter_snr / 10.0)]),
     }
     if narrow:
         rel = (vel - own_vel)[:, :2]

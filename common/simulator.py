@@ -43,7 +43,8 @@ def _rng(seed: int, key: str) -> np.random.Generator:
 def _truth(movers: list[Mover], t: np.ndarray) -> tuple[np.ndarray, ...]:
     """Stacked positions (M, T, 3), velocities (M, T, 3), presence (M, T), ids (M,)."""
     if not movers:
-        return np.zeros((0, len(t), 3)), np.zeros((0, len(t), 3)), np.zeros((0, len(t)), bool), np.zeros(0, int)
+        empty = np.zeros((0, len(t), 3))
+        return empty, empty, np.zeros((0, len(t)), bool), np.zeros(0, int)
     pos, vel, alive = zip(*(m.states(t) for m in movers))
     return np.stack(pos), np.stack(vel), np.stack(alive), np.array([m.id for m in movers])
 
