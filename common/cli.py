@@ -18,6 +18,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "simulate": ("services.simulator.main", "publish a scenario's plots, detections, truth"),
     "watch": ("services.watch.main", "print decoded messages of a key expression live"),
     "demo": ("services.demo.main", "run the built-in scenario end to end and summarise"),
+    "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
+    "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
 }
 
 

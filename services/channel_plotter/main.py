@@ -1,0 +1,51 @@
+"""``pfusion channel-plotter``: channel plots of one base -> fused plots (001 modules 31-34).
+
+Subscribes radar/plots/<base>/*, publishes radar/fused/<base> once per scan (also when
+empty). The algorithm is common.plot_fusion; this module only decodes, validates and
+publishes.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from common import protocol
+from common.cli import add_common, load_config
+from common.config import section
+from common.plot_fusion import LateInput, PlotFusion, PlotterParams, Plots
+from common.service import Rejected, Service
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+    p.add_argument("--base", required=True, help="bistatic base id (a [[radar.base]] id)")
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    base = cfg.base(args.base)
+    params = section(cfg, "radar.plotter", PlotterParams)
+    svc = Service("channel_plotter", base.id, cfg)
+    core = PlotFusion(base.channels, base.p, params)
+
+    def on_plots(key: str, payload: bytes) -> None:
+        msg = protocol.decode("plots", payload)
+        if msg["base"] != base.id:
+            raise Rejected("unknown_base", f"base '{msg['base']}' on a plotter of '{base.id}'")
+        if msg["channel"] != key.rsplit("/", 1)[-1]:
+            raise Rejected("channel_mismatch", f"channel '{msg['channel']}' published on {key}")
+        plots = Plots(msg["rb"], msg["vb"], msg["az"], msg["srb"], msg["svb"], msg["saz"])
+        try:
+            scans = core.push(msg["channel"], msg["t"], plots)
+        except LateInput as e:
+            raise Rejected(e.reason, e.detail) from None
+        for t, fused in scans:
+            svc.last_t = t
+            svc.publish(f"radar/fused/{base.id}", {
+                "v": protocol.VERSION, "t": t, "base": base.id,
+                "rb": fused.rb, "vb": fused.vb, "az": fused.az,
+                "srb": fused.srb, "svb": fused.svb, "saz": fused.saz, "n_ch": fused.n_ch,
+            })
+
+    svc.subscribe(f"radar/plots/{base.id}/*", on_plots)
+    return svc.run()
