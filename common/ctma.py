@@ -252,8 +252,10 @@ def effective_bounds(lo: np.ndarray, hi: np.ndarray, own_c: np.ndarray) -> Bound
     pc = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]]) - own_c
     near = np.clip(own_c, lo[:2], hi[:2]) - own_c
     vc = np.array([[lo[2], lo[3]], [lo[2], hi[3]], [hi[2], lo[3]], [hi[2], hi[3]]])
+    tol = 1e-9 * np.max(np.abs(vc))
     vnear = np.clip(np.zeros(2), lo[2:], hi[2:])
-    if np.all(vnear == 0.0):
+    if np.all(np.abs(vnear) <= tol):
+        vnear = np.zeros(2)
         k_min, k_max = 0.0, TWO_PI
     else:
         k_min, k_max = _arc(np.arctan2(vc[:, 0], vc[:, 1]))
