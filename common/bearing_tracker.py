@@ -54,7 +54,8 @@ from common.track_table import Status, TrackTable
 class TrackerParams:
     """[sonar.tracker] parameters (000 first embodiment).
 
-    mode: "broadband" z = [brg, amp], or "narrowband" z = [brg, amp, freq].
+    mode: "broadband" z = [brg, amp], "narrowband" z = [brg, amp, freq], or "auto"
+        (the service picks narrowband when the first detection list carries freq[]).
     q_theta, q_a, q_f: process noise powers of Q (rad^2/s^3, dB^2/s^3, Hz^2/s^3).
     sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
     p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL).
@@ -69,10 +70,10 @@ class TrackerParams:
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
     """
 
-    mode: Literal["broadband", "narrowband"] = "broadband"
-    q_theta: float = 1e-7
-    q_a: float = 0.01
-    q_f: float = 1e-5
+    mode: Literal["auto", "broadband", "narrowband"] = "auto"
+    q_theta: float = 1e-8
+    q_a: float = 1e-4
+    q_f: float = 1e-6
     sigma_amp_db: float = 2.0
     sigma_freq_hz: float = 0.05
     p_d: float = 0.9
@@ -82,9 +83,9 @@ class TrackerParams:
     beta: float = 1e-2
     delete_drop: float = 12.0
     endfire_deg: float = 10.0
-    init_brg_rate_sigma: float = 0.01
-    init_amp_rate_sigma: float = 0.5
-    init_freq_rate_sigma: float = 0.01
+    init_brg_rate_sigma: float = 0.002
+    init_amp_rate_sigma: float = 0.05
+    init_freq_rate_sigma: float = 0.002
     crossing: bool = True
     band_hz: list[float] = field(default_factory=lambda: [10.0, 1000.0])
     ml_brg_tol_deg: float = 2.0
@@ -209,6 +210,8 @@ class BearingTracker:
         crossing: CrossingParams | None = None,
     ) -> None:
         self.params = p = params
+        if p.mode == "auto":
+            raise ValueError('resolve mode "auto" before building the tracker')
         self.narrowband = p.mode == "narrowband"
         self.array_kind = array_kind
         self.sigma0 = sigma0
@@ -274,9 +277,11 @@ class BearingTracker:
         own_x: float = 0.0,
         own_y: float = 0.0,
         freq: np.ndarray | None = None,
+        sbrg: np.ndarray | None = None,
     ) -> Cycle:
         """Process the detection list of time t (true bearings rad, linear amplitudes > 0,
-        frequencies Hz for narrowband) and return the tracks."""
+        frequencies Hz for narrowband; sbrg, when given, the sensor's bearing sigmas
+        used instead of the array law) and return the tracks."""
         if self.t is not None and not t > self.t:
             raise TimeOrderError(f"t={t} is not after the previous cycle t={self.t}")
         if self.narrowband and freq is None:
@@ -287,6 +292,8 @@ class BearingTracker:
         cols = [brg, level] + ([np.asarray(freq, dtype=float).reshape(-1)] if self.narrowband else [])
         z = np.column_stack(cols)
         Rd = self._R_diag(brg, level, heading)
+        if sbrg is not None:
+            Rd[:, 0] = np.square(np.asarray(sbrg, dtype=float).reshape(-1))
         n_det = brg.size
 
         idx = tab.active_indices()
@@ -295,7 +302,7 @@ class BearingTracker:
             T = t - tab.t_last[idx]
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
-        rows, cols_, y, detS, d2 = self._associate(x, P, z, Rd)
+        rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
         R = _diag(Rd[cols_])
         alpha, ambiguous = self._crossing(t, idx, x, P, z, rows, cols_, heading, n_det)
 
@@ -321,7 +328,7 @@ class BearingTracker:
         tab.status[idx[confirm]] = Status.CONFIRMED
         self._delete(idx[delete])
 
-        unused = np.ones(n_det, dtype=bool)
+        unused = ~gated
         unused[cols_] = False
         self._open(t, z[unused], Rd[unused])
         self._group_lines()
@@ -333,15 +340,24 @@ class BearingTracker:
         return self._cycle(t, live)
 
     def _associate(
-        self, x: np.ndarray, P: np.ndarray, z: np.ndarray, Rd: np.ndarray
+        self, x: np.ndarray, P: np.ndarray, z: np.ndarray, Rd: np.ndarray, idx: np.ndarray
     ) -> tuple[np.ndarray, ...]:
         """Gated GNN (000 d^2, G, GNN) -> track rows, detection cols, innovations y,
-        |S| and d^2 of the assigned pairs."""
+        |S| and d^2 of the assigned pairs, and the mask (M,) of detections inside the
+        gate of a confirmed track.
+
+        The mask implements 000 "medidas superfluas con las que no pueden ser asociadas
+        trazas de marcacion son valoradas como el inicio de una nueva traza": a detection
+        that could be associated with a confirmed track (inside its gate) but lost the
+        GNN assignment does not open a track. Deviation from "every unassociated
+        detection": without it a clutter detection next to a target opens a duplicate
+        track that then takes the target's detections over (seen on sonar_tma)."""
         p, m = self.params, self.m
         N, M = x.shape[0], z.shape[0]
         empty = np.zeros(0, dtype=np.intp)
+        gated = np.zeros(M, dtype=bool)
         if N == 0 or M == 0:
-            return empty, empty, np.zeros((0, m)), np.zeros(0), np.zeros(0)
+            return empty, empty, np.zeros((0, m)), np.zeros(0), np.zeros(0), gated
         zp = x @ self.H.T
         A = self.H @ P @ self.H.T  # H P^pre H'
         yb = wrap_pi(z[None, :, 0] - zp[:, None, 0])
@@ -355,13 +371,14 @@ class BearingTracker:
         detS = np.linalg.det(S)
         ok = d2 <= gate_value(p.p_d, p.p_fa, self.beam, detS, m)  # 000 gate G
         ti, dj, y, d2, detS = ti[ok], dj[ok], y[ok], d2[ok], detS[ok]
+        gated[dj[self.table.status[idx[ti]] == Status.CONFIRMED]] = True
         cost = np.full((N, M), np.inf)
         cost[ti, dj] = d2
         pair = np.full((N, M), -1, dtype=np.intp)
         pair[ti, dj] = np.arange(ti.size)
         rows, cols = gnn(cost)  # 000 GNN on the squared statistical distances
         k = pair[rows, cols]
-        return rows, cols, y[k], detS[k], d2[k]
+        return rows, cols, y[k], detS[k], d2[k], gated
 
     def _crossing(
         self, t: float, idx: np.ndarray, x: np.ndarray, P: np.ndarray, z: np.ndarray,

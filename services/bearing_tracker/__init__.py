@@ -1,0 +1,1 @@
+"""``pfusion bearing-tracker``: sonar bearing tracks of one array (seed 000)."""
