@@ -18,6 +18,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "simulate": ("services.simulator.main", "publish a scenario's plots, detections, truth"),
     "watch": ("services.watch.main", "print decoded messages of a key expression live"),
     "demo": ("services.demo.main", "run the built-in scenario end to end and summarise"),
+    "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
     "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
 }

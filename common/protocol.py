@@ -107,13 +107,33 @@ TRUTH_SONAR = {
     "id": _col("ints", nonneg=True), "x": _col(), "y": _col(), "vx": _col(), "vy": _col(),
     "brg": _col(angle=True),
 }
+BTRACK_STATUS = ("tentative", "confirmed")
+BTRACK = {
+    "id": Field("int", nonneg=True), "status": Field("str", choices=BTRACK_STATUS),
+    "x": Field("floats"), "P": Field("floats"), "quality": Field("float"),
+    "ambiguous": Field("bool"), "ml": Field("int", optional=True, nonneg=True),
+}
+MLTRACK = {
+    "id": Field("int", nonneg=True), "lines": Field("ints"),
+    "brg": Field("float", angle=True), "brg_rate": Field("float"),
+}
+BTRACKS = {
+    "v": V, "t": T, "array": ID, "tracks": Field("maps", sub=BTRACK),
+    "multiline": Field("maps", optional=True, sub=MLTRACK),
+}
+HISTORY = {
+    "v": V, "t": T, "array": ID, "id": Field("int", nonneg=True),
+    "status": Field("str", choices=("confirmed", "deleted")),
+    "t_hist": _col(nonneg=True), "brg": _col(angle=True), "sbrg": _col(positive=True),
+    "own_x": _col(), "own_y": _col(),
+}
 SIM_STATUS = {"v": V, "t": T, "state": Field("str", choices=("running", "done")),
               "scans": Field("int", nonneg=True), "published": Field("int", nonneg=True)}
 
 SCHEMAS: dict[str, dict[str, Field]] = {
     "plots": PLOTS, "fused": FUSED, "etracks": ETRACKS, "gtracks": GTRACKS,
     "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
-    "sim_status": SIM_STATUS,
+    "sim_status": SIM_STATUS, "btracks": BTRACKS, "history": HISTORY,
 }
 
 
