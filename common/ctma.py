@@ -54,13 +54,17 @@ class Bounds:
         w = (self.k_max - self.k_min) % TWO_PI
         return TWO_PI if w == 0.0 else w
 
+    def violations(self, r: float, k: float, v: float) -> np.ndarray:
+        """Flags (R, K, V) outside their interval (control unit 30, 003 claim 2b)."""
+        return np.array([
+            not self.r_min <= r <= self.r_max,
+            (k - self.k_min) % TWO_PI > self.course_width,
+            not self.v_min <= v <= self.v_max,
+        ])
+
     def contains(self, r: float, k: float, v: float) -> bool:
         """True when (R, K, V) lies inside the solution space of the bounds."""
-        return (
-            self.r_min <= r <= self.r_max
-            and self.v_min <= v <= self.v_max
-            and (k - self.k_min) % TWO_PI <= self.course_width
-        )
+        return not self.violations(r, k, v).any()
 
 
 # 003 Fig. 5 "valores límites mínimos 75": 0.1-100 km, 0.1-15 m/s, all courses
@@ -173,9 +177,9 @@ def solve_ctma(
         lb[2], ub[2] = bounds.k_min, bounds.k_min + w
     x_s, _ = start.state_at(t[m])
     r_s, k_s, v_s = rkv(x_s, oc)
+    k_s = k_s if full else _course_into(k_s, bounds)
     starts = [
-        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s, k_s if full else _course_into(k_s, bounds), v_s],
-                        start.beta[2:-2])),
+        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s, k_s, v_s], start.beta[2:-2])),
         np.concatenate(([brg[m], np.sqrt(bounds.r_min * bounds.r_max), bounds.k_min + 0.5 * w,
                          0.5 * (bounds.v_min + bounds.v_max)], start.beta[2:-2])),
     ]
@@ -190,7 +194,8 @@ def solve_ctma(
             best = res
     beta, _ = to_beta(best.x)
     d, Hw, r = weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)
-    return TmaSolution(beta, covariance(Hw), float(t0), legs, r, float(d @ d), int(best.nfev), bool(best.status > 0), float(t[m]))
+    return TmaSolution(beta, covariance(Hw), float(t0), legs, r, float(d @ d), int(best.nfev), bool(best.status > 0),
+                       float(t[m]))
 
 
 def residual_factor(ctma_res: np.ndarray, tma_res: np.ndarray, sbrg: np.ndarray | float) -> float:
@@ -456,10 +461,7 @@ class TmaTracker:
                         return self._output(tma, tc, oc, False, True, phase, 1.0)
                     continue
                 break
-            to_fix = flags.any(axis=0) if flags.any() else ~np.array(
-                [self.bounds.r_min <= rkv_t[0] <= self.bounds.r_max,
-                 self.bounds.contains(self.bounds.r_min, rkv_t[1], self.bounds.v_min),
-                 self.bounds.v_min <= rkv_t[2] <= self.bounds.v_max])
+            to_fix = flags.any(axis=0) if flags.any() else self.bounds.violations(*rkv_t)
             self.bounds = recentre(self.bounds, to_fix, r, k, v)
             modified = True
             z += 1

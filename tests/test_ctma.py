@@ -70,7 +70,8 @@ def test_state_and_effective_bounds_hand_values():
     assert (eff.r_min, eff.r_max) == pytest.approx((1000.0, 2000.0))
     assert (eff.v_min, eff.v_max) == pytest.approx((np.hypot(s30, s30), np.hypot(2 * s60, 2 * s60)))
     assert (eff.k_min, eff.k_max) == pytest.approx((np.arctan2(s30, 2 * s60), np.arctan2(2 * s60, s30)))
-    wide = effective_bounds(*state_bounds(Bounds(1000.0, 2000.0, 0.0, D(90.0), 1.0, 2.0), np.zeros(2), 0.0), np.zeros(2))
+    quarter = Bounds(1000.0, 2000.0, 0.0, D(90.0), 1.0, 2.0)
+    wide = effective_bounds(*state_bounds(quarter, np.zeros(2), 0.0), np.zeros(2))
     assert wide.v_min == 0.0 and wide.course_width == pytest.approx(2 * np.pi)
 
 

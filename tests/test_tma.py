@@ -81,8 +81,9 @@ def test_bearing_model_jacobian_matches_finite_differences():
     _, H = bearing_model(beta, t, own, 100.0, legs)
     eps = 1e-4
     num = np.stack([
-        wrap(bearing_model(beta + eps * e, t, own, 100.0, legs)[0] - bearing_model(beta - eps * e, t, own, 100.0, legs)[0])
-        / (2 * eps) for e in np.eye(6)
+        wrap(bearing_model(beta + eps * e, t, own, 100.0, legs)[0]
+             - bearing_model(beta - eps * e, t, own, 100.0, legs)[0]) / (2 * eps)
+        for e in np.eye(6)
     ], 1)
     assert H == pytest.approx(num, rel=1e-5, abs=1e-12)
 
