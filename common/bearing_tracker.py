@@ -74,7 +74,7 @@ class TrackerParams:
     q_theta: float = 1e-8
     q_a: float = 1e-4
     q_f: float = 1e-6
-    sigma_amp_db: float = 2.0
+    sigma_amp_db: float = 3.0
     sigma_freq_hz: float = 0.05
     p_d: float = 0.9
     p_fa: float = 1e-3
