@@ -1,0 +1,88 @@
+"""``pfusion record KEYEXPR... --out run.pfrec``: write every sample of the key
+expressions (under the root) to a recording, for ``--duration`` seconds or, by default,
+until the simulator reports ``sim/status`` done (then ``--linger`` seconds more)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import queue
+import signal
+import threading
+import time
+from pathlib import Path
+
+import zenoh
+
+from common import protocol
+from common.cli import add_common, load_config
+from common.bus import open_session
+from common.recording import RecordWriter
+
+log = logging.getLogger("record")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p, config_required=False)
+    p.add_argument("keyexpr", nargs="+", help="key expression under the root, e.g. 'radar/plots/**'")
+    p.add_argument("--out", required=True, help="recording file to write (.pfrec)")
+    p.add_argument("--duration", type=float, default=None,
+                   help="record this many seconds (default: until sim/status is done)")
+    p.add_argument("--linger", type=float, default=1.0,
+                   help="seconds to keep recording after sim/status done")
+
+
+class Stamped:
+    """Zenoh callbacks stamp each sample with the monotonic clock and enqueue it."""
+
+    def __init__(self) -> None:
+        self.q: queue.SimpleQueue[tuple[float, str, bytes]] = queue.SimpleQueue()
+
+    def on_sample(self, sample: zenoh.Sample) -> None:
+        self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes()))
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    root = cfg.zenoh.root
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    inbox, done = Stamped(), Stamped()
+    out = Path(args.out)
+    with open_session(cfg.zenoh) as session, out.open("wb") as f:
+        subs = [session.declare_subscriber(f"{root}/{k}", inbox.on_sample) for k in args.keyexpr]
+        if args.duration is None:
+            subs.append(session.declare_subscriber(f"{root}/sim/status", done.on_sample))
+        token = session.liveliness().declare_token(f"{root}/alive/record/{out.stem}")
+        writer = RecordWriter(f, root, time.time())
+        t0 = time.monotonic()
+        end = t0 + args.duration if args.duration is not None else float("inf")
+        last = 0.0
+        log.info("recording %s to %s", ", ".join(args.keyexpr), out)
+        while not stop.is_set() and time.monotonic() < end:
+            try:
+                stamp, key, payload = inbox.q.get(timeout=0.1)
+            except queue.Empty:
+                stamp = None
+            if stamp is not None:
+                last = max(last, stamp - t0)
+                writer.write(key, last, payload)
+            while not done.q.empty():
+                _, _, payload = done.q.get()
+                try:
+                    finished = protocol.decode("sim_status", payload)["state"] == "done"
+                except protocol.DecodeError as e:
+                    log.error("invalid sim/status ignored: %s", e)
+                    continue
+                if finished:
+                    end = min(end, time.monotonic() + args.linger)
+        token.undeclare()
+        for s in subs:
+            s.undeclare()
+        while not inbox.q.empty():
+            stamp, key, payload = inbox.q.get()
+            last = max(last, stamp - t0)
+            writer.write(key, last, payload)
+    log.info("wrote %d records to %s", writer.count, out)
+    return 0

@@ -1,0 +1,185 @@
+"""``pfusion run``: start every service of a deployment as child processes, prefix their
+log lines with their names, restart crashed ones with back-off, stop them all cleanly.
+
+Children are started with subprocess in their own process group (Ctrl-C reaches only
+``run``, which then stops the simulator and the services first and the router last).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterable
+from typing import IO
+
+from common.bus import free_port, wait_port
+from common.cli import COMMANDS, add_common, load_config
+from common.deployment import (
+    Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
+)
+from common.procs import pfusion_argv
+
+STOP_TIMEOUT_S = 5.0
+POLL_S = 0.1
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+    p.add_argument("--with-router", action="store_true",
+                   help="also run a router on the first connect endpoint (or a free loopback port)")
+    p.add_argument("--with-simulator", metavar="SCENARIO",
+                   help="run this scenario once every service is alive")
+    p.add_argument("--seed", type=int, default=1, help="simulator seed")
+    p.add_argument("--speed", type=float, default=0.0,
+                   help="simulator speed, times real time (0: as fast as possible)")
+    p.add_argument("--wait-alive", action="append", default=[], metavar="SERVICE/INSTANCE",
+                   help="the simulator also waits for this liveliness token (repeatable)")
+    p.add_argument("--exit-after-sim", type=float, default=None, metavar="SECONDS",
+                   help="stop everything this long after the simulator is done")
+
+
+class Log:
+    """Our stderr, shared by the children's log pumps: one whole line per write."""
+
+    def __init__(self, stream: IO[str]) -> None:
+        self._stream = stream
+        self._lock = threading.Lock()
+
+    def line(self, name: str, text: str) -> None:
+        with self._lock:
+            self._stream.write(f"[{name}] {text}\n")
+            self._stream.flush()
+
+
+class Supervised:
+    """One child process; restarted with back-off when ``restart`` and it exits."""
+
+    def __init__(self, spec: ChildSpec, log: Log, restart: bool = True) -> None:
+        self.spec, self.log, self.restart = spec, log, restart
+        self.backoff = Backoff()
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.started_at = 0.0
+        self.restart_at: float | None = None
+        self.returncode: int | None = None
+
+    def start(self) -> None:
+        self.proc = subprocess.Popen(
+            pfusion_argv(*self.spec.argv), stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"}, start_new_session=True,
+        )
+        self.started_at = time.monotonic()
+        self.restart_at = None
+        self.returncode = None
+        assert self.proc.stdout is not None
+        threading.Thread(target=self._pump, args=(self.proc.stdout,), daemon=True).start()
+        self.log.line("run", f"started {self.spec.name} pid={self.proc.pid}")
+
+    def _pump(self, stream: IO[bytes]) -> None:
+        for raw in stream:
+            self.log.line(self.spec.name, raw.decode(errors="replace").rstrip("\r\n"))
+        stream.close()
+
+    def running(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    def tick(self, now: float) -> None:
+        """Notice an exit and schedule (or perform) the restart."""
+        if self.proc is None:
+            return
+        if self.restart_at is not None:
+            if now >= self.restart_at:
+                self.start()
+            return
+        if self.returncode is not None or self.proc.poll() is None:
+            return
+        self.returncode = self.proc.returncode
+        ran = now - self.started_at
+        if not self.restart:
+            self.log.line("run", f"{self.spec.name} exited with code {self.returncode}")
+            return
+        delay = self.backoff.next_delay(ran)
+        self.restart_at = now + delay
+        self.log.line("run", f"{self.spec.name} exited with code {self.returncode} after "
+                             f"{ran:.1f} s; restarting in {delay:.1f} s")
+
+
+def stop_all(children: Iterable[Supervised], log: Log) -> None:
+    """SIGTERM to every running child, SIGKILL to those still running after 5 s."""
+    live = [c for c in children if c.running()]
+    for c in live:
+        assert c.proc is not None
+        c.proc.send_signal(signal.SIGTERM)
+    deadline = time.monotonic() + STOP_TIMEOUT_S
+    for c in live:
+        assert c.proc is not None
+        try:
+            c.proc.wait(max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            log.line("run", f"{c.spec.name} did not stop within {STOP_TIMEOUT_S} s: killed")
+            c.proc.kill()
+            c.proc.wait()
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    log = Log(sys.stderr)
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    connect: list[str] = list(args.connect or [])
+    router: Supervised | None = None
+    if args.with_router:
+        endpoint = router_endpoint(cfg, args.connect, free_port())
+        connect = [endpoint]
+        router = Supervised(ChildSpec("router", ("router", "--listen", endpoint), ""), log)
+        router.start()
+        port = loopback_port(endpoint)
+        if port is not None:
+            wait_port(port)
+        log.line("run", f"router on {endpoint}")
+    services = [Supervised(s, log) for s in plan(cfg, args.config, COMMANDS, connect)]
+    if not services:
+        log.line("run", "the configuration describes no service whose command exists")
+    for s in services:
+        s.start()
+    sim: Supervised | None = None
+    if args.with_simulator:
+        names = [s.spec.alive for s in services] + list(args.wait_alive)
+        sim = Supervised(simulator_spec(args.config, args.with_simulator, args.seed, args.speed,
+                                        names, connect), log, restart=False)
+        sim.start()
+    code = supervise([*([router] if router else []), *services], sim, args.exit_after_sim,
+                     stop, log)
+    stop_all([*([sim] if sim else []), *services], log)
+    if router is not None:
+        stop_all([router], log)
+    log.line("run", "stopped")
+    return code
+
+
+def supervise(children: list[Supervised], sim: Supervised | None, exit_after_sim: float | None,
+              stop: threading.Event, log: Log) -> int:
+    """Restart crashed children until ``stop`` (or ``exit_after_sim`` seconds after the
+    simulator ended); returns 1 if the simulator failed, else 0."""
+    sim_done_at: float | None = None
+    code = 0
+    while not stop.wait(POLL_S):
+        now = time.monotonic()
+        for c in children:
+            c.tick(now)
+        if sim is not None and sim_done_at is None:
+            sim.tick(now)
+            if sim.returncode is not None:
+                sim_done_at = now
+                code = 0 if sim.returncode == 0 else 1
+                log.line("run", "simulator done" if code == 0 else "simulator failed")
+        if exit_after_sim is not None and sim_done_at is not None \
+                and now - sim_done_at >= exit_after_sim:
+            break
+    return code
