@@ -21,6 +21,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
     "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
+    "run": ("services.run.main", "start every service of a deployment, restart crashed ones"),
+    "status": ("services.status.main", "list live services and their counters"),
+    "record": ("services.record.main", "record messages of key expressions to a .pfrec file"),
+    "replay": ("services.replay.main", "republish a .pfrec recording in order"),
 }
 
 
