@@ -63,7 +63,7 @@ class ElementaryParams:
     score_delete, max_coast, max_coast_tentative: module 41 rules (module docstring).
     """
 
-    sigma_gamma: float = 1.0
+    sigma_gamma: float = 5.0
     sigma_omega: float = 1e-3
     gate_prob: float = 0.999
     delta_vb: float = 50.0
@@ -83,10 +83,14 @@ class ElementaryParams:
 class RadarCrossingParams(CrossingParams):
     """Table [radar.crossing]: the fields of CrossingParams plus `enabled`.
 
-    volume defaults to the (r_b, theta) domain 200 km x 2 pi instead of 2 pi.
+    Radar defaults: volume is the (r_b, theta) domain 200 km x 2 pi (instead of 2 pi);
+    max_duration is 10 s (instead of 60 s): in memory mode a track is extrapolated
+    while ambiguous, and on the crossing scenario extrapolations longer than about ten
+    1 s scans left the gate and lost the track.
     """
 
     volume: float = 200e3 * 2.0 * np.pi
+    max_duration: float = 10.0
     enabled: bool = True
 
 

@@ -96,9 +96,10 @@ def test_pure_prediction_uses_eq19_eq20() -> None:
 
 
 def test_update_matches_eq27_eq31() -> None:
-    trk = started(ElementaryParams())
+    p = ElementaryParams(sigma_gamma=2.0, sigma_omega=1e-3)
+    trk = started(p)
     x0, P0 = trk.report().x[0], trk.report().P[0]
-    F, Q = seed_F(1.0), seed_Q(1.0, 1.0, 1e-3)
+    F, Q = seed_F(1.0), seed_Q(1.0, 2.0, 1e-3)
     xp, Pp = F @ x0, F @ P0 @ F.T + Q
     y = np.array([9905.0, -49.0, 1.0015])
     R = np.diag(np.square(SIG))
