@@ -65,6 +65,7 @@ class RecordReader:
         self._stream = stream
         self._unpacker = msgpack.Unpacker(raw=False, strict_map_key=False)
         self._fed = 0
+        self._consumed = 0
         self.truncated_bytes = 0
         self.count = 0
         first = self._next()
@@ -81,11 +82,13 @@ class RecordReader:
         """The next msgpack object, or None at the end of the data."""
         while True:
             try:
-                return self._unpacker.unpack()
+                obj = self._unpacker.unpack()
+                self._consumed = self._unpacker.tell()
+                return obj
             except msgpack.OutOfData:
                 chunk = self._stream.read(CHUNK)
                 if not chunk:
-                    self.truncated_bytes = self._fed - self._unpacker.tell()
+                    self.truncated_bytes = self._fed - self._consumed
                     return None
                 self._fed += len(chunk)
                 self._unpacker.feed(chunk)

@@ -1,0 +1,225 @@
+"""``pfusion run``: the plan of a deployment, the back-off, and real runs (a router of its
+own on a loopback port, the services that exist, the simulator, a killed child)."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from common import protocol
+from common.bus import Inbox, free_port, open_session, wait_port
+from common.cli import COMMANDS
+from common.config import ZenohConfig, load, parse
+from common.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
+from common.procs import pfusion_argv
+from services.watch.main import kind_of
+
+REPO = Path(__file__).resolve().parents[1]
+TWO_TARGETS = str(REPO / "scenarios" / "two_targets.toml")
+SONAR = str(REPO / "scenarios" / "sonar_tma.toml")
+ROOT = "pf/v1"
+ALL = {"channel-plotter", "elementary-tracker", "global-fusion", "bearing-tracker", "tma"}
+
+
+def test_plan_of_three_bases() -> None:
+    specs = plan(load(TWO_TARGETS), "d.toml", ALL, ["tcp/127.0.0.1:1"])
+    assert [s.name for s in specs] == [
+        "channel-plotter/b1", "elementary-tracker/b1", "channel-plotter/b2",
+        "elementary-tracker/b2", "channel-plotter/b3", "elementary-tracker/b3", "global-fusion"]
+    assert specs[0].argv == ("channel-plotter", "--config", "d.toml",
+                             "--connect", "tcp/127.0.0.1:1", "--base", "b1")
+    assert specs[1].alive == "elementary_tracker/b1"
+    assert specs[-1].argv == ("global-fusion", "--config", "d.toml", "--connect", "tcp/127.0.0.1:1")
+
+
+def test_plan_of_an_array_and_of_one_base() -> None:
+    specs = plan(load(SONAR), "s.toml", ALL)
+    assert [(s.name, s.argv[-2:], s.alive) for s in specs] == [
+        ("bearing-tracker/a1", ("--array", "a1"), "bearing_tracker/a1"),
+        ("tma/a1", ("--array", "a1"), "tma/a1")]
+    one = parse({"radar": {"base": [{"id": "b9", "tx": [1.0, 0, 0], "rx": [0, 0, 0], "channels": ["c"]}]}})
+    assert [s.name for s in plan(one, "f", ALL)] == ["channel-plotter/b9", "elementary-tracker/b9"]
+
+
+def test_plan_keeps_only_existing_commands() -> None:
+    assert [s.name for s in plan(load(TWO_TARGETS), "f", {"elementary-tracker"})] == [
+        "elementary-tracker/b1", "elementary-tracker/b2", "elementary-tracker/b3"]
+
+
+def test_simulator_spec_waits_for_the_services() -> None:
+    s = simulator_spec("d.toml", "s.toml", 3, 2.0, ["a/b", "c/*"], ["tcp/127.0.0.1:5"])
+    argv = list(s.argv)
+    assert argv[:7] == ["simulate", "--config", "d.toml", "--scenario", "s.toml", "--seed", "3"]
+    assert argv[argv.index("--speed") + 1] == "2.0"
+    assert [argv[i + 1] for i, a in enumerate(argv) if a == "--wait-alive"] == ["a/b", "c/*"]
+    assert argv[argv.index("--connect") + 1] == "tcp/127.0.0.1:5"
+
+
+def test_backoff_doubles_to_ten_seconds_and_resets_after_thirty() -> None:
+    b = Backoff()
+    assert [b.next_delay(1.0) for _ in range(7)] == [0.5, 1.0, 2.0, 4.0, 8.0, 10.0, 10.0]
+    assert b.next_delay(29.9) == 10.0
+    assert b.next_delay(30.0) == 0.5
+    assert b.next_delay(0.1) == 1.0
+
+
+def test_router_endpoint_choice() -> None:
+    scenario = load(TWO_TARGETS)
+    assert router_endpoint(scenario, None, 4242) == "tcp/127.0.0.1:4242"
+    assert router_endpoint(scenario, ["tcp/127.0.0.1:9"], 4242) == "tcp/127.0.0.1:9"
+    explicit = parse({"zenoh": {"connect": ["tcp/127.0.0.1:7999"]}})
+    assert router_endpoint(explicit, None, 4242) == "tcp/127.0.0.1:7999"
+    assert loopback_port("tcp/127.0.0.1:7999") == 7999
+    assert loopback_port("tcp/router:7447") is None
+
+
+class Run:
+    """``pfusion run`` as a subprocess; its stderr lines are kept (and the started pids)."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(pfusion_argv("run", *args), stderr=subprocess.PIPE,
+                                     stdout=subprocess.DEVNULL,
+                                     env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stderr is not None
+        for raw in self.proc.stderr:
+            self.lines.append(raw.decode(errors="replace").rstrip("\n"))
+
+    def pids(self, name: str) -> list[int]:
+        pat = re.compile(rf"^\[run\] started {re.escape(name)} pid=(\d+)$")
+        return [int(m.group(1)) for line in list(self.lines) if (m := pat.match(line))]
+
+    def log(self) -> str:
+        return "\n".join(self.lines[-60:])
+
+    def stop(self, timeout: float = 20.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            code = self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise
+        self._reader.join(5)
+        return code
+
+
+class Collector:
+    """Decoded messages of the run's router, with a liveliness token for --wait-alive."""
+
+    def __init__(self, endpoint: str, keys: list[str]) -> None:
+        port = loopback_port(endpoint)
+        assert port is not None
+        wait_port(port, 30)
+        self.session = open_session(ZenohConfig([endpoint], [], ROOT))
+        self.inbox = Inbox()
+        self.subs = [self.session.declare_subscriber(f"{ROOT}/{k}", self.inbox.on_sample) for k in keys]
+        self.token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
+        self.messages: list[tuple[str, dict[str, Any]]] = []
+
+    def drain(self) -> None:
+        while (env := self.inbox.get(0.0)) is not None:
+            self.messages.append((env.key, protocol.decode(kind_of(env.key, ROOT), env.payload)))
+
+    def of(self, suffix: str) -> list[dict[str, Any]]:
+        self.drain()
+        return [m for k, m in self.messages if k == f"{ROOT}/{suffix}"]
+
+    def wait_for(self, what: str, predicate: Any, run: Run, timeout: float = 60.0) -> None:
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            assert time.monotonic() < deadline, f"timed out waiting for {what}\n{run.log()}"
+            assert run.proc.poll() is None, f"run exited with {run.proc.returncode}\n{run.log()}"
+            time.sleep(0.1)
+
+    def close(self) -> None:
+        for s in self.subs:
+            s.undeclare()
+        self.token.undeclare()
+        self.session.close()
+
+
+def output_keys() -> list[str]:
+    """Keys whose messages the existing radar services of two_targets publish."""
+    keys = []
+    for base in ("b1", "b2", "b3"):
+        if "channel-plotter" in COMMANDS:
+            keys.append(f"radar/fused/{base}")
+        if "elementary-tracker" in COMMANDS:
+            keys.append(f"radar/etracks/{base}")
+    if "global-fusion" in COMMANDS:
+        keys.append("radar/gtracks")
+    return keys
+
+
+def gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def test_run_with_router_and_simulator_delivers_every_service_output() -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    run = Run("--config", TWO_TARGETS, "--connect", endpoint, "--with-router",
+              "--with-simulator", TWO_TARGETS, "--wait-alive", "test/collector",
+              "--exit-after-sim", "3")
+    keys = output_keys()
+    col = Collector(endpoint, ["radar/**", "sim/status"])
+    try:
+        col.wait_for("sim/status done", lambda: col.of("sim/status"), run)
+        last_t = col.of("sim/status")[0]["t"]
+        col.wait_for("every output of the last scan",
+                     lambda: all(any(m["t"] == last_t for m in col.of(k)) for k in keys), run)
+        assert run.proc.wait(30) == 0, run.log()
+    finally:
+        col.close()
+        run.stop()
+    for k in keys:
+        assert len(col.of(k)) == 120, k
+    assert len(col.of("radar/plots/b2/c3")) == 120
+    names = ["router", "simulate", *(s.name for s in plan(load(TWO_TARGETS), "", COMMANDS))]
+    started = [line for line in run.lines if line.startswith("[run] started ")]
+    assert len(started) == len(names)
+    for name in names:
+        assert any(line.startswith(f"[{name}] ") for line in run.lines), name
+        assert all(gone(pid) for pid in run.pids(name)), name
+    assert "[run] simulator done" in run.lines and run.lines[-1] == "[run] stopped"
+
+
+@pytest.mark.skipif("elementary-tracker" not in COMMANDS, reason="no elementary tracker yet")
+def test_run_restarts_a_killed_service_and_its_output_resumes() -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    run = Run("--config", TWO_TARGETS, "--connect", endpoint, "--with-router",
+              "--with-simulator", TWO_TARGETS, "--speed", "5", "--wait-alive", "test/collector")
+    col = Collector(endpoint, ["radar/etracks/b1", "sim/status"])
+    try:
+        col.wait_for("etracks of b1", lambda: len(col.of("radar/etracks/b1")) >= 10, run)
+        [pid] = run.pids("elementary-tracker/b1")
+        os.kill(pid, signal.SIGKILL)
+        killed_at = col.of("radar/etracks/b1")[-1]["t"]
+        col.wait_for("the restart", lambda: len(run.pids("elementary-tracker/b1")) == 2, run)
+        assert any(re.match(r"\[run\] elementary-tracker/b1 exited with code -9 after .*"
+                            r"restarting in 0.5 s", line) for line in run.lines), run.log()
+        col.wait_for("etracks of b1 after the restart",
+                     lambda: col.of("radar/etracks/b1")[-1]["t"] >= killed_at + 5, run)
+        assert not col.of("sim/status"), "the simulator ended before the restart was seen"
+    finally:
+        col.close()
+        assert run.stop() == 0, run.log()
+    new_pid = run.pids("elementary-tracker/b1")[1]
+    assert new_pid != pid and gone(new_pid)
+    assert "[run] stopped" in run.lines
