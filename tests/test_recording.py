@@ -1,13 +1,28 @@
-"""The .pfrec format: round trip, a truncated last record, invalid files."""
+"""The .pfrec format (round trip, a truncated last record, invalid files) and a real
+record -> replay run that must give the services' outputs again."""
 
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import msgpack
+import numpy as np
 import pytest
 
+from common import protocol
+from common.cli import COMMANDS
+from common.config import load
+from common.deployment import ChildSpec, plan
 from common.recording import RecordReader, RecordWriter, RecordingError
+from tests.harness import ROOT, SCENARIOS, Deployment
+
+TWO_TARGETS = str(SCENARIOS / "two_targets.toml")
+OUTPUT_KEYS = {
+    "channel-plotter": lambda base: [f"radar/fused/{base}"],
+    "elementary-tracker": lambda base: [f"radar/etracks/{base}"],
+    "global-fusion": lambda _: ["radar/gtracks"],
+}
 
 RECORDS = [("pf/v1/radar/plots/b1/c1", 0.0, b"\x81\xa1v\x01"),
            ("pf/v1/radar/plots/b1/c2", 0.25, b""),
@@ -86,3 +101,80 @@ def test_writer_refuses_time_going_back() -> None:
     w.write("k", 1.0, b"")
     with pytest.raises(ValueError):
         w.write("k", 0.5, b"")
+
+
+def outputs(d: Deployment, keys: list[str]) -> dict[str, dict[float, dict]]:
+    """Every output message of ``keys``, by key and message time (times are unique)."""
+    out: dict[str, dict[float, dict]] = {}
+    for k in keys:
+        msgs = d.of(k)
+        out[k] = {m["t"]: m for m in msgs}
+        assert len(out[k]) == len(msgs), f"{k}: two messages with one time"
+    return out
+
+
+def run_services(d: Deployment, specs: list[ChildSpec], keys: list[str]) -> None:
+    for k in [*keys, "sim/status"]:
+        d.collect(k)
+    for s in specs:
+        d.start(s.name.replace("/", "-"), *s.argv)
+
+
+def wait_last_scan(d: Deployment, keys: list[str]) -> None:
+    d.wait_for(lambda: bool(d.of("sim/status")))
+    last = d.of("sim/status")[0]["t"]
+    d.wait_for(lambda: all(any(m["t"] == last for m in d.of(k)) for k in keys))
+
+
+def same(a: object, b: object, where: str) -> None:
+    """Equal messages: numbers (and arrays) to 1e-9, everything else exactly."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and a.keys() == b.keys(), where
+        for k in a:
+            same(a[k], b[k], f"{where}.{k}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            same(x, y, f"{where}[{i}]")
+    elif isinstance(a, (np.ndarray, float)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9, err_msg=where)
+    else:
+        assert a == b, where
+
+
+def test_replayed_plots_give_the_same_outputs(tmp_path: Path) -> None:
+    specs = plan(load(TWO_TARGETS), TWO_TARGETS, COMMANDS)
+    keys = [k for s in specs for k in OUTPUT_KEYS[s.argv[0]](s.argv[-1])]
+    assert keys, "no radar service exists to compare"
+    rec_file = tmp_path / "two.pfrec"
+    for sub in ("live", "replay"):
+        (tmp_path / sub).mkdir()
+    with Deployment(tmp_path / "live") as d:
+        run_services(d, specs, keys + ["radar/plots/**"])
+        recorder = d.start("record", "record", "radar/plots/**", "sim/status",
+                           "--out", str(rec_file), "--config", TWO_TARGETS)
+        d.simulate(Path(TWO_TARGETS), wait_alive=[s.alive for s in specs] + ["record/two"])
+        wait_last_scan(d, keys)
+        assert recorder.wait(30) == 0
+        live = outputs(d, keys)
+        plots = [(k, m) for k, m in d.messages if "/plots/" in k]
+    with rec_file.open("rb") as f:
+        reader = RecordReader(f)
+        recorded = list(reader)
+    assert reader.errors == 0 and reader.root == ROOT
+    assert [r.key for r in recorded if "/plots/" in r.key] == [k for k, _ in plots]
+    for r, (_, m) in zip([r for r in recorded if "/plots/" in r.key], plots):
+        same(protocol.decode("plots", r.payload), m, r.key)
+    assert len(plots) == 120 * 9 and len(recorded) == len(plots) + 1
+    with Deployment(tmp_path / "replay") as d:
+        run_services(d, specs, keys)
+        replay = d.start("replay", "replay", str(rec_file), "--config", TWO_TARGETS,
+                         "--wait-alive", "test/collector",
+                         *[a for s in specs for a in ("--wait-alive", s.alive)])
+        wait_last_scan(d, keys)
+        assert replay.wait(30) == 0
+        again = outputs(d, keys)
+    for k in keys:
+        assert len(live[k]) == 120 and live[k].keys() == again[k].keys(), k
+        for t in live[k]:
+            same(live[k][t], again[k][t], f"{k} t={t}")
