@@ -1,0 +1,314 @@
+"""Module 61 of 001 (management) and the cycle of step 24, "fusion posterior".
+
+`GlobalFusion.push(msg)` takes one decoded `radar/etracks/<base>` message and returns
+the `radar/gtracks` messages of the cycles it completed. A cycle at time t runs when
+every base has reported t or a later time, or when some base is `max_wait` seconds
+(message time) past t; missing bases are then treated as not reporting (their
+memberships are kept, without measurement). With max_wait = 0 this is the literal
+rule "every base reported t, or any base reported a later time"; a positive value
+tolerates the normal reordering between the per-base processes.
+
+Cycle at t (001 figure 7):
+  predict every global track to t ([55]-[56]);
+  module 63: confirm or dissociate the memberships ([48] <= gamma_max), then add
+    free elementary tracks of non-contributing bases, including to tracks in pure
+    prediction (resolution loop);
+  module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
+    [46]); candidates that can be extended to more bases win conflicts, then lower
+    residual; step 5 extends the new tracks through module 63;
+  seed 004: ambiguity of the predicted positions (CrossingManager), alpha as gain;
+  module 64 + 65: localisation by blocks from the contributing updated elementary
+    tracks and the EKF update with [49]-[50];
+  module 61: score = sum of the contributing elementary scores; tracks without any
+    contributor stay in pure prediction and are deleted after `max_coast` cycles;
+    numbers are stable and recycled (common.track_table).
+A contributing elementary track that was not updated this scan keeps its membership
+but is not used as a measurement (its state is a pure prediction).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from common import global_ekf
+from common.bistatic import POS
+from common.config import RadarBase
+from common.crossing import CrossingManager, CrossingParams
+from common.gating import chi2_gate
+from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
+from common.global_init import InitParams, azimuth_pairs, pair_candidates, select
+from common.localisation import Constraints, block_localise, gauss_newton
+from common.track_table import Status, TrackTable
+
+STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
+               Status.COASTING: "coasting"}
+
+
+@dataclass(frozen=True)
+class FusionParams(InitParams):
+    """Parameters of `[radar.fusion]` (module 62 thresholds inherited from InitParams).
+
+    block_levels, box_sigma: module 64, subdivisions and box half-width (sigmas).
+    gate_prob: chi-square(3) probability of the gate gamma_max on [48].
+    q, q_z: process noise powers sigma_vxy^2, sigma_vz^2 of [51] (m^2/s^3).
+    meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
+    confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
+        at least this many contributing updated elementary tracks.
+    max_coast: deletion after this many cycles without contributors (module 61).
+    max_wait: seconds of message time a cycle waits for a late base (see module doc).
+    init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
+    """
+
+    block_levels: int = 3
+    box_sigma: float = 4.0
+    gate_prob: float = 0.999
+    q: float = 4.0
+    q_z: float = 1.0
+    meas_inflation: float = 1.0
+    confirm_cycles: int = 3
+    confirm_bases: int = 2
+    max_coast: int = 5
+    max_wait: float = 3.0
+    init_confirmed_only: bool = True
+
+
+def etrack_set(msgs: dict[int, dict[str, Any]]) -> ETrackSet:
+    """Stack the decoded etracks messages of one cycle, keyed by base index."""
+    tr = [(b, t) for b, m in msgs.items() for t in m["tracks"]]
+    n = len(tr)
+    x = np.array([t["x"] for _, t in tr], dtype=float).reshape(n, 5)
+    P = np.array([t["P"] for _, t in tr], dtype=float).reshape(n, 5, 5)
+    return ETrackSet(
+        base=np.array([b for b, _ in tr], dtype=np.intp),
+        id=np.array([t["id"] for _, t in tr], dtype=np.int64),
+        y=x[:, YR],
+        R=P[:, YR][:, :, YR],
+        score=np.array([t["score"] for _, t in tr], dtype=float),
+        confirmed=np.array([t["status"] == "confirmed" for _, t in tr], dtype=bool),
+        updated=np.array([t["updated"] for _, t in tr], dtype=bool),
+        ambiguous=np.array([t["ambiguous"] for _, t in tr], dtype=bool),
+    )
+
+
+class GlobalFusion:
+    """Global Cartesian tracks from the elementary tracks of all bases (001 step 24)."""
+
+    def __init__(self, bases: list[RadarBase], params: FusionParams | None = None,
+                 crossing: CrossingParams | None = None) -> None:
+        self.p = params or FusionParams()
+        self.init_p = InitParams(**{f.name: getattr(self.p, f.name)
+                                    for f in dataclasses.fields(InitParams)})
+        self.base_ids = [b.id for b in bases]
+        self.index = {b: i for i, b in enumerate(self.base_ids)}
+        self.tx = np.array([b.tx for b in bases], dtype=float)
+        self.rx = np.array([b.rx for b in bases], dtype=float)
+        if len(bases) < 2 or np.ptp(self.rx, axis=0).max() > 1e-6:
+            raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
+        B = len(bases)
+        self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
+                                          "n_good": ((), np.int64), "confirmed": ((), bool),
+                                          "ambiguous": ((), bool)})
+        self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
+        self.gamma_max = chi2_gate(self.p.gate_prob, 3)
+        self.az_gate = np.radians(self.p.az_gate_deg)
+        self.pending: dict[float, dict[int, dict[str, Any]]] = {}
+        self.t_last: float | None = None
+
+    def is_late(self, t: float) -> bool:
+        """True if a message of time t arrives after its cycle already ran."""
+        return self.t_last is not None and t <= self.t_last
+
+    def push(self, msg: dict[str, Any]) -> list[dict[str, Any]]:
+        """Buffer one etracks message (known base, not late); run completed cycles."""
+        self.pending.setdefault(msg["t"], {})[self.index[msg["base"]]] = msg
+        out = []
+        while self.pending:
+            t0 = min(self.pending)
+            seen = {b for m in self.pending.values() for b in m}
+            waited = max(self.pending) - t0 > self.p.max_wait
+            if len(seen) < len(self.base_ids) and not waited:
+                break  # some base has reported neither t0 nor a later time
+            out.append(self.cycle(t0, self.pending.pop(t0)))
+        return out
+
+    def cycle(self, t: float, msgs: dict[int, dict[str, Any]]) -> dict[str, Any]:
+        """One fusion cycle at time t with the messages of the bases that reported."""
+        E = etrack_set(msgs)
+        reported = np.zeros(len(self.base_ids), dtype=bool)
+        reported[list(msgs)] = True
+        tab = self.table
+        live = tab.active_indices()
+        x, P = tab.x.copy(), tab.P.copy()
+        if live.size:
+            x[live], P[live] = global_ekf.predict(tab.x[live], tab.P[live], t - tab.t_last[live],
+                                                  self.p.q, self.p.q_z)
+        row = self._confirm(live, x, P, E, reported)
+        free = np.ones(len(E), dtype=bool)
+        free[row[row >= 0]] = False
+        self._extend(live, x, P, E, reported, free, row)
+        new, used = self._initialise(t, E, reported, free)
+        if new.size:
+            grow = tab.capacity - x.shape[0]
+            x = np.concatenate([x, np.zeros((grow, 6))])
+            P = np.concatenate([P, np.zeros((grow, 6, 6))])
+            row = np.concatenate([row, np.full((grow, row.shape[1]), -1, dtype=np.intp)])
+            x[new], P[new] = tab.x[new], tab.P[new]
+            for k in range(used.shape[1]):
+                row[new, E.base[used[:, k]]] = used[:, k]
+            self._extend(new, x, P, E, reported, free, row)
+        self._update(t, tab.active_indices(), new, x, P, E, row)
+        return self._manage(t, E, row)
+
+    def _confirm(self, live: np.ndarray, x: np.ndarray, P: np.ndarray, E: ETrackSet,
+                 reported: np.ndarray) -> np.ndarray:
+        """Module 63 task 1: row of E of every membership (cap, B) after dissociating
+        members that left or fail the gate [48]; -1 where none or base not reported."""
+        tab = self.table
+        B = len(self.base_ids)
+        row = np.full((tab.capacity, B), -1, dtype=np.intp)
+        s, b = np.nonzero(tab.has[live] & reported[None, :])
+        s = live[s]
+        keys = E.base * (1 << 40) + E.id
+        order = np.argsort(keys)
+        k = b * (1 << 40) + tab.member[s, b]
+        r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
+        ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
+        for bb in np.unique(b[ok]):
+            sel = np.flatnonzero(ok & (b == bb))
+            y_pred, GPG = projections(x[s[sel]], P[s[sel]], self.tx[bb], self.rx[bb])
+            ok[sel] = distance(y_pred, GPG, E.y[r[sel]], E.R[r[sel]]) <= self.gamma_max  # [48]
+        tab.has[s[~ok], b[~ok]] = False  # dissociation
+        row[s[ok], b[ok]] = r[ok]
+        return row
+
+    def _extend(self, slots: np.ndarray, x: np.ndarray, P: np.ndarray, E: ETrackSet,
+                reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
+        """Module 63 tasks 2-3: free elementary tracks of base b to the tracks of
+        `slots` that do not contain b, by the resolution loop."""
+        tab = self.table
+        for b in np.flatnonzero(reported):
+            tracks = slots[~tab.has[slots, b]]
+            ets = np.flatnonzero(free & (E.base == b))
+            i, m, g = gated_pairs(x, P, tracks, ets, E, self.tx[b], self.rx[b],
+                                  self.az_gate, self.gamma_max)
+            ti, mi = resolve(i, m, g)
+            tab.has[ti, b] = True
+            tab.member[ti, b] = E.id[mi]
+            row[ti, b] = mi
+            free[mi] = False
+
+    def _initialise(self, t: float, E: ETrackSet, reported: np.ndarray,
+                    free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Module 62 on the free elementary tracks: (slots of the new tracks, their two
+        elementary tracks (n, 2) as rows of E)."""
+        none = np.zeros(0, dtype=np.intp), np.zeros((0, 2), dtype=np.intp)
+        ok = free & E.updated & (E.confirmed if self.p.init_confirmed_only else True)
+        ia, ib = [], []
+        for a in np.flatnonzero(reported):
+            for b in np.flatnonzero(reported):
+                if b <= a:
+                    continue
+                ra = np.flatnonzero(ok & (E.base == a))
+                rb = np.flatnonzero(ok & (E.base == b))
+                pa, pb = azimuth_pairs(E.y[ra, 2], E.y[rb, 2], self.az_gate)  # test 1
+                ia.append(ra[pa])
+                ib.append(rb[pb])
+        if not ia:
+            return none
+        cand = pair_candidates(E.y, E.R, E.base, np.concatenate(ia), np.concatenate(ib),
+                               self.tx, self.rx, self.init_p)  # tests 2-3, step 4
+        n_c = cand.rows.shape[0]
+        if n_c == 0:
+            return none
+        n_ext = np.zeros(n_c)
+        for b in np.flatnonzero(reported):
+            ets = np.flatnonzero(free & (E.base == b))
+            i, _, _ = gated_pairs(cand.x, cand.P, np.arange(n_c), ets, E, self.tx[b],
+                                  self.rx[b], self.az_gate, self.gamma_max)
+            n_ext[np.unique(i)] += 1
+        win = select(cand.rows, cand.cost - 1e6 * n_ext)
+        tab = self.table
+        slots = tab.add(win.size)
+        tab.x[slots], tab.P[slots], tab.t_last[slots] = cand.x[win], cand.P[win], t
+        used = cand.rows[win]
+        for k in range(2):
+            tab.has[slots, E.base[used[:, k]]] = True
+            tab.member[slots, E.base[used[:, k]]] = E.id[used[:, k]]
+            free[used[:, k]] = False
+        return slots, used
+
+    def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
+                P: np.ndarray, E: ETrackSet, row: np.ndarray) -> None:
+        """Crossing test (004), localisation (64) and EKF update (65) at time t."""
+        tab = self.table
+        r = row[live]
+        active = np.append(E.updated, False)[r] & ~np.isin(live, new)[:, None]
+        n_act = active.sum(1)
+        multi, single = n_act >= 2, n_act == 1
+        pos = np.full((live.size, 3), np.nan)
+        pos_cov = np.full((live.size, 3, 3), np.nan)
+        if multi.any():
+            rm = r[multi]
+            sig = np.sqrt(np.diagonal(E.R[rm], axis1=2, axis2=3))
+            c = Constraints(E.y[rm, 0], sig[..., 0], E.y[rm, 2], sig[..., 2], active[multi],
+                            self.tx, self.rx)
+            x0 = x[live[multi]][:, POS]
+            xg, Cg = gauss_newton(x0, c, z_min=self.p.z_min)
+            pos[multi], pos_cov[multi], _ = block_localise(  # module 64
+                xg, Cg, c, self.p.k_sigma, self.p.block_levels, self.p.z_min, self.p.z_max,
+                self.p.box_sigma)
+        located = multi & np.isfinite(pos).all(axis=1)
+        P_pos = P[live][:, POS][:, :, POS]
+        alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, POS], P_pos,
+                                        z_meas=pos, n_meas=int(located.sum()))
+        tab.ambiguous[live] = amb
+        infl = self.p.meas_inflation
+        if located.any():
+            s = live[located]
+            rl = r[located]
+            x[s], P[s], _ = global_ekf.fused_update(  # module 65
+                x[s], P[s], pos[located], infl * pos_cov[located], E.y[rl, 1],
+                infl * E.R[rl, 1, 1], active[located], self.tx, self.rx, alpha[located])
+        if single.any():
+            s = live[single]
+            rs = r[single][active[single]]
+            bs = np.nonzero(active[single])[1]
+            x[s], P[s] = global_ekf.single_base_update(
+                x[s], P[s], E.y[rs], infl * E.R[rs], self.tx[bs], self.rx[bs], alpha[single])
+        tab.x[live], tab.P[live] = x[live], P[live]
+        tab.t_last[live] = t
+        updated = located | single
+        tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
+        tab.n_good[live] += n_act >= self.p.confirm_bases
+        tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
+        tab.status[live] = np.where(~updated & ~np.isin(live, new), Status.COASTING,
+                                    np.where(tab.confirmed[live], Status.CONFIRMED,
+                                             Status.TENTATIVE))
+
+    def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> dict[str, Any]:
+        """Module 61: scores, deletion, recycling; the gtracks message of the cycle."""
+        tab = self.table
+        live = tab.active_indices()
+        r = row[live]
+        tab.score[live] = np.append(E.score, 0.0)[r].sum(axis=1)  # module 61
+        orphan = ~tab.has[live].any(axis=1)
+        dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
+        if dead.size:
+            self.crossing.forget(tab.id[dead])
+            tab.remove(dead)
+        self.t_last = t
+        tracks = []
+        for s in tab.active_indices():
+            tracks.append({
+                "id": int(tab.id[s]), "status": STATUS_NAME[Status(tab.status[s])],
+                "x": tab.x[s].tolist(), "P": tab.P[s].ravel().tolist(),
+                "score": float(tab.score[s]),
+                "etracks": [[self.base_ids[b], int(tab.member[s, b])]
+                            for b in np.flatnonzero(tab.has[s])],
+                "ambiguous": bool(tab.ambiguous[s]),
+            })
+        return {"v": 1, "t": float(t), "tracks": tracks}
