@@ -19,12 +19,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "watch": ("services.watch.main", "print decoded messages of a key expression live"),
     "demo": ("services.demo.main", "run the built-in scenario end to end and summarise"),
     "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
+    "tma": ("services.tma.main", "target motion analysis of one array's confirmed bearing tracks (002, 003)"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
     "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
     "run": ("services.run.main", "start every service of a deployment, restart crashed ones"),
     "status": ("services.status.main", "list live services and their counters"),
     "record": ("services.record.main", "record messages of key expressions to a .pfrec file"),
     "replay": ("services.replay.main", "republish a .pfrec recording in order"),
+    "global-fusion": ("services.global_fusion.main", "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
+    "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
 }
 
 

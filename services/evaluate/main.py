@@ -1,0 +1,142 @@
+"""``pfusion evaluate``: score the global tracks against the simulator truth, live and
+at the end: GOSPA (with switching term) and OSPA, track number switches and breaks
+(common.metrics), position RMSE against the PCRLB and NEES (common.pcrlb).
+
+Subscribes radar/gtracks, sim/truth/radar and sim/status; pairs tracks and truth by
+message time; only confirmed global tracks are scored. Stops on SIGTERM/SIGINT, or
+once sim/status says "done" and nothing arrived for --quiet seconds; then prints the
+final table on stdout. The PCRLB needs the scenario part ([sim.radar]) of the config
+for the channel accuracies and detection probabilities.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+import time
+import tomllib
+from typing import Any
+
+import numpy as np
+
+from common import protocol
+from common.cli import add_common, load_config
+from common.config import Config, section
+from common.global_fusion import FusionParams
+from common.pcrlb import Evaluation, channel_information, mean_nees_interval, score_targets
+from common.service import Service
+from common.simulator import load_scenario
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+    p.add_argument("--cutoff", type=float, default=2000.0, help="GOSPA/OSPA cutoff c (m)")
+    p.add_argument("--settle", type=float, default=20.0,
+                   help="seconds after a target's first pairing before RMSE/NEES count")
+    p.add_argument("--quiet", type=float, default=2.0,
+                   help="stop this many seconds after sim done with no new message")
+    p.add_argument("--every", type=int, default=10, help="print a live line every N steps")
+
+
+def base_information(cfg: Config) -> np.ndarray | None:
+    """Expected information per base (B, 3, 3) from [sim.radar], or None."""
+    if "sim" not in cfg.doc or cfg.path is None:
+        return None
+    radar = load_scenario(tomllib.loads(cfg.path.read_text())).radar
+    if radar is None:
+        return None
+    out = []
+    for b in cfg.bases:
+        ch = [radar.channel(c) for c in b.channels]
+        out.append(channel_information(np.array([c.pd for c in ch]), np.array([c.srb for c in ch]),
+                                       np.array([c.svb for c in ch]), np.array([c.saz for c in ch])))
+    return np.array(out)
+
+
+def _state(m: dict[str, Any]) -> np.ndarray:
+    return np.column_stack([m["x"], m["vx"], m["y"], m["vy"], m["z"], m["vz"]])
+
+
+def report(ev: Evaluation, cfg: Config, settle: float) -> str:
+    """The final table."""
+    s = ev.metrics.summary()
+    lines = [f"steps {s.steps}  mean GOSPA {s.mean_gospa:.1f} m  mean OSPA {s.mean_ospa:.1f} m  "
+             f"GOSPA {s.gospa:.1f} (loc {s.localisation:.3g} missed {s.missed:.3g} "
+             f"false {s.false:.3g} switching {s.switching:.3g})  switches {s.switches}  "
+             f"breaks {s.breaks}"]
+    info = base_information(cfg)
+    if info is None:
+        return "\n".join(lines + ["(no [sim.radar] in the config: no PCRLB)"])
+    p = section(cfg, "radar.fusion", FusionParams)
+    tx = np.array([b.tx for b in cfg.bases])
+    rx = np.array([b.rx for b in cfg.bases])
+    P0 = np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2])
+    scores = score_targets(ev, tx, rx, info, p.q, p.q_z, P0, settle)
+    lines.append(f"{'truth':>6} {'n':>5} {'RMSE m':>9} {'PCRLB m':>9} {'ratio':>6} "
+                 f"{'NEES3':>6} {'NEES6':>6}")
+    for i, sc in sorted(scores.items()):
+        lines.append(f"{i:>6} {sc.n:>5} {sc.rmse:>9.1f} {sc.bound:>9.1f} "
+                     f"{sc.rmse / sc.bound:>6.2f} {sc.nees_pos:>6.2f} {sc.nees_state:>6.2f}")
+    n = sum(sc.n for sc in scores.values())
+    if n:
+        lo3, hi3 = mean_nees_interval(3, n)
+        lo6, hi6 = mean_nees_interval(6, n)
+        lines.append(f"95% interval of the mean NEES over {n} samples: 3 dof [{lo3:.2f}, "
+                     f"{hi3:.2f}], 6 dof [{lo6:.2f}, {hi6:.2f}]")
+    return "\n".join(lines)
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    ev = Evaluation(c=args.cutoff, gamma=args.cutoff)
+    svc = Service("evaluate", "main", cfg)
+    truth: dict[float, dict[str, Any]] = {}
+    tracks: dict[float, dict[str, Any]] = {}
+    state = {"done": False, "last": time.monotonic()}
+
+    def score(t: float) -> None:
+        m, g = truth.pop(t), tracks.pop(t)
+        conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
+        tx = np.array([k["x"] for k in conf], dtype=float).reshape(-1, 6)
+        tP = np.array([k["P"] for k in conf], dtype=float).reshape(-1, 6, 6)
+        ids = np.array([k["id"] for k in conf], dtype=np.int64)
+        if ev.metrics.times and t <= ev.metrics.times[-1]:
+            return
+        ev.add(t, m["id"], _state(m), ids, tx, tP)
+        svc.last_t = t
+        k = len(ev.metrics.times)
+        if k % args.every == 0:
+            r = ev.metrics.gospa_series[-1]
+            print(f"t={t:8.1f} truths={len(m['id'])} confirmed={len(conf)} GOSPA={r.distance:8.1f} "
+                  f"OSPA={ev.metrics.ospa_series[-1]:8.1f}", flush=True)
+
+    def on_truth(key: str, payload: bytes) -> None:
+        m = protocol.decode("truth_radar", payload)
+        truth[m["t"]] = m
+        state["last"] = time.monotonic()
+        if m["t"] in tracks:
+            score(m["t"])
+
+    def on_gtracks(key: str, payload: bytes) -> None:
+        g = protocol.decode("gtracks", payload)
+        tracks[g["t"]] = g
+        state["last"] = time.monotonic()
+        if g["t"] in truth:
+            score(g["t"])
+
+    def on_status(key: str, payload: bytes) -> None:
+        state["done"] = protocol.decode("sim_status", payload)["state"] == "done"
+        state["last"] = time.monotonic()
+
+    def watchdog() -> None:
+        while not (state["done"] and time.monotonic() - state["last"] > args.quiet):
+            time.sleep(0.2)
+        svc.stop()
+
+    svc.subscribe("radar/gtracks", on_gtracks)
+    svc.subscribe("sim/truth/radar", on_truth)
+    svc.subscribe("sim/status", on_status)
+    threading.Thread(target=watchdog, daemon=True).start()
+    code = svc.run()
+    print(report(ev, cfg, args.settle), flush=True)
+    return code

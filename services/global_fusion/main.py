@@ -1,0 +1,52 @@
+"""``pfusion global-fusion``: elementary tracks of all bases -> global Cartesian tracks
+(001 step 24, modules 61-65; crossing management of 004).
+
+Subscribes radar/etracks/*, publishes radar/gtracks once per fusion cycle with every
+live global track. The algorithm is common.global_fusion; this module only decodes,
+validates and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
+[radar.fusion_crossing] (CrossingParams); without that table the global tracks use the
+sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
+in m^3 as `volume`).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from common import protocol
+from common.cli import add_common, load_config
+from common.config import ConfigError, section
+from common.crossing import CrossingParams
+from common.global_fusion import FusionParams, GlobalFusion
+from common.service import Rejected, Service
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    params = section(cfg, "radar.fusion", FusionParams)
+    crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
+                if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
+    try:
+        core = GlobalFusion(cfg.bases, params, crossing)
+    except ValueError as e:
+        raise ConfigError("radar.base", str(e)) from None
+    svc = Service("global_fusion", "main", cfg)
+
+    def on_etracks(key: str, payload: bytes) -> None:
+        msg = protocol.decode("etracks", payload)
+        if msg["base"] not in core.index:
+            raise Rejected("unknown_base", f"base '{msg['base']}' is not configured")
+        if key.rsplit("/", 1)[-1] != msg["base"]:
+            raise Rejected("base_mismatch", f"base '{msg['base']}' published on {key}")
+        if core.is_late(msg["t"]):
+            raise Rejected("time_backwards", f"t={msg['t']} after the cycle of t={core.t_last}")
+        for out in core.push(msg):
+            svc.last_t = out["t"]
+            svc.publish("radar/gtracks", out)
+
+    svc.subscribe("radar/etracks/*", on_etracks)
+    return svc.run()
