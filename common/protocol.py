@@ -127,6 +127,22 @@ HISTORY = {
     "t_hist": _col(nonneg=True), "brg": _col(angle=True), "sbrg": _col(positive=True),
     "own_x": _col(), "own_y": _col(),
 }
+TMA_SOLUTION = {
+    "track": Field("int", nonneg=True), "t": T,
+    "x": Field("float"), "y": Field("float"), "vx": Field("float"), "vy": Field("float"),
+    "P": Field("floats", length=16), "range": Field("float", nonneg=True),
+    "course": Field("float", angle=True), "speed": Field("float", nonneg=True),
+    "constrained": Field("bool"), "bounds": Field("floats", length=6), "bounds_modified": Field("bool"),
+    "phase": Field("str", choices=("pre", "post")), "residual_factor": Field("float", nonneg=True),
+    "legs": Field("floats"),
+}
+TMA = {"v": V, "t": T, "array": ID, "solutions": Field("maps", sub=TMA_SOLUTION)}
+TMA_BOUNDS = {
+    "v": V, "t": T, "track": Field("int", optional=True, nonneg=True),
+    "r_min": Field("float", nonneg=True), "r_max": Field("float", positive=True),
+    "course_min": Field("float", angle=True), "course_max": Field("float", angle=True),
+    "speed_min": Field("float", nonneg=True), "speed_max": Field("float", positive=True),
+}
 SIM_STATUS = {"v": V, "t": T, "state": Field("str", choices=("running", "done")),
               "scans": Field("int", nonneg=True), "published": Field("int", nonneg=True)}
 
@@ -134,6 +150,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "plots": PLOTS, "fused": FUSED, "etracks": ETRACKS, "gtracks": GTRACKS,
     "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
     "sim_status": SIM_STATUS, "btracks": BTRACKS, "history": HISTORY,
+    "tma": TMA, "tma_bounds": TMA_BOUNDS,
 }
 
 

@@ -1,0 +1,127 @@
+"""``pfusion tma --config F --array A``: range, course and speed of every confirmed bearing
+track of one array (TMA of seed 002, constrained TMA with error handling of seed 003).
+
+Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (bearings)
+and root/sonar/tma/bounds/A (bounds at run time); fetches root/sonar/history/A/<id> once
+per newly confirmed track; publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
+
+Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tma.bounds]
+(BoundsParams, default of every array) overridden key by key by [sonar.tma.bounds.<A>].
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any
+
+from common import protocol
+from common.cli import add_common, load_config
+from common.config import Config, ConfigError, section
+from common.ctma import Bounds, CtmaConfig
+from common.service import Rejected, Service
+from common.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaInputError, TmaManager, TmaParams, make_bounds
+
+HISTORY_TIMEOUT_S = 2.0
+SUBTABLES = ("ctma", "bounds")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+    p.add_argument("--array", required=True, help="sonar array id of the deployment")
+
+
+def _table(doc: dict[str, Any], dotted: str) -> dict[str, Any]:
+    for part in dotted.split("."):
+        doc = doc.get(part, {})
+        if not isinstance(doc, dict):
+            raise ConfigError(dotted, "expected a table")
+    return doc
+
+
+def _leaf_section(cfg: Config, dotted: str, table: dict[str, Any], cls: type) -> Any:
+    """section() of ``table`` placed at ``dotted`` (its sub-tables read separately)."""
+    doc: dict[str, Any] = {k: v for k, v in table.items() if not isinstance(v, dict)}
+    for part in reversed(dotted.split(".")):
+        doc = {part: doc}
+    return section(replace(cfg, doc=doc), dotted, cls)
+
+
+def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds]:
+    """The TMA parameters, core config and initial bounds of ``array``."""
+    tma = _table(cfg.doc, "sonar.tma")
+    extra = sorted(k for k, v in tma.items() if isinstance(v, dict) and k not in SUBTABLES)
+    if extra:
+        raise ConfigError(f"sonar.tma.{extra[0]}", f"unknown table (known: {', '.join(SUBTABLES)})")
+    params = _leaf_section(cfg, "sonar.tma", tma, TmaParams)
+    core = section(cfg, "sonar.tma.ctma", CtmaConfig)
+    bounds = _table(cfg.doc, "sonar.tma.bounds")
+    known = {a.id for a in cfg.arrays}
+    for k, v in bounds.items():
+        if isinstance(v, dict) and k not in known:
+            raise ConfigError(f"sonar.tma.bounds.{k}", "not an array of the deployment")
+    merged = {**bounds, **_table(cfg.doc, f"sonar.tma.bounds.{array}")}
+    try:
+        b = make_bounds(_leaf_section(cfg, f"sonar.tma.bounds.{array}", merged, BoundsParams))
+    except TmaInputError as e:
+        raise ConfigError(f"sonar.tma.bounds.{array}", e.detail) from None
+    return params, core, b
+
+
+def _checked(call: Callable[[], None]) -> None:
+    try:
+        call()
+    except TmaInputError as e:
+        raise Rejected(e.reason, e.detail) from None
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    arr = cfg.array(args.array)
+    params, core, bounds = tma_config(cfg, arr.id)
+    svc = Service("tma", arr.id, cfg)
+    mgr = TmaManager(arr.id, params, bounds, core)
+
+    def history(tid: int) -> dict[str, Any] | None:
+        """The bearing register of a newly confirmed track (None: not served in time)."""
+        for reply in svc.session.get(svc.key(f"sonar/history/{arr.id}/{tid}"), timeout=HISTORY_TIMEOUT_S):
+            if reply.ok is None:
+                continue
+            try:
+                return protocol.decode("history", reply.ok.payload.to_bytes())
+            except protocol.DecodeError as e:
+                svc.reject(f"history:{e.field}", str(e), f"sonar/history/{arr.id}/{tid}")
+        svc.counters["history_missing"] += 1
+        return None
+
+    def process() -> None:
+        ready, dropped = mgr.ready()
+        if dropped:
+            svc.reject("no_own_ship", f"{dropped} btracks messages without own-ship position", "sonar/btracks")
+        for msg in ready:
+            hist = {tid: history(tid) for tid in mgr.new_confirmed(msg)}
+            svc.publish(f"sonar/tma/{arr.id}", mgr.step(msg, hist))
+            svc.last_t = msg["t"]
+
+    def on_det(key: str, payload: bytes) -> None:
+        msg = protocol.decode("detections", payload)
+        if msg["array"] != arr.id:
+            raise Rejected("unknown_array", f"array '{msg['array']}' on {key}")
+        mgr.add_own(msg["t"], msg["own"]["x"], msg["own"]["y"])
+        process()
+
+    def on_btracks(key: str, payload: bytes) -> None:
+        _checked(lambda: mgr.push(protocol.decode("btracks", payload)))
+        process()
+
+    def on_bounds(key: str, payload: bytes) -> None:
+        msg = protocol.decode("tma_bounds", payload)
+        ids: list[int] = []
+        _checked(lambda: ids.extend(mgr.set_bounds(msg)))
+        svc.log.info("bounds %s for tracks %s", [msg[k] for k in BOUNDS_FIELDS], ids)
+
+    svc.subscribe(f"sonar/detections/{arr.id}", on_det)
+    svc.subscribe(f"sonar/btracks/{arr.id}", on_btracks)
+    svc.subscribe(f"sonar/tma/bounds/{arr.id}", on_bounds)
+    return svc.run()

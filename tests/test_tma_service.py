@@ -1,0 +1,289 @@
+"""TMA service (002, 003): (a) the pure glue common.tma_manager, (b) the bounds message
+and the [sonar.tma] configuration, (c) simulator -> router -> bearing tracker -> tma as
+real processes on scenarios/sonar_tma.toml.
+
+Measured for (c) (seeds 1-3 run offline through the same cores, 60 s TMA cycles, raw
+filtered bearings of the bearing tracker): final range error 0.5-2.4 % and course error
+0.2-3.7 deg; from t = 2700 s (10 min after the second own-ship turn) range error <= 10 %
+and course error <= 12 deg for every target. The bounds asserted below leave about 2x
+margin: final range error < 10 %, course < 10 deg, speed < 0.5 m/s; after 2700 s range
+error < 20 %, course < 25 deg.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import msgpack
+import numpy as np
+import pytest
+
+from common import protocol
+from common.config import ConfigError, parse
+from common.ctma import MINIMAL_BOUNDS, TWO_PI, Bounds
+from common.tma_manager import TmaInputError, TmaManager, TmaParams, make_bounds, thin
+from harness import ROOT, SCENARIOS, Deployment
+from services.tma.main import tma_config
+
+SIG = 0.01
+TARGET = np.array([6000.0, 4000.0, -2.0, 1.5])
+
+
+def own_at(t: float) -> tuple[float, float]:
+    """Own ship: North at 3 m/s for 900 s, then East at 3 m/s."""
+    return (0.0, 3.0 * t) if t <= 900.0 else (3.0 * (t - 900.0), 2700.0)
+
+
+def true_brg(t: float) -> float:
+    ox, oy = own_at(t)
+    x, y = TARGET[:2] + TARGET[2:] * t
+    return math.atan2(x - ox, y - oy) % TWO_PI
+
+
+def btrack(tid: int, t: float, status: str = "confirmed", ambiguous: bool = False,
+           brg: float | None = None) -> dict[str, Any]:
+    P = [0.0] * 16
+    P[0] = SIG**2
+    return {"id": tid, "status": status, "x": [true_brg(t) if brg is None else brg, 0.0, 20.0, 0.0],
+            "P": P, "quality": 5.0, "ambiguous": ambiguous}
+
+
+def btracks(t: float, tracks: list[dict[str, Any]], array: str = "a1") -> dict[str, Any]:
+    return {"v": 1, "t": t, "array": array, "tracks": tracks}
+
+
+def history(tid: int, times: np.ndarray) -> dict[str, Any]:
+    own = np.array([own_at(t) for t in times])
+    return {"v": 1, "t": float(times[-1]), "array": "a1", "id": tid, "status": "confirmed",
+            "t_hist": times, "brg": np.array([true_brg(t) for t in times]), "sbrg": np.full(times.size, SIG),
+            "own_x": own[:, 0], "own_y": own[:, 1]}
+
+
+def feed(mgr: TmaManager, t: float, tracks: list[dict[str, Any]],
+         histories: dict[int, dict[str, Any] | None] | None = None) -> dict[str, Any] | None:
+    """Own ship, then btracks at t; the tma message (None if nothing was ready)."""
+    mgr.add_own(t, *own_at(t))
+    mgr.push(btracks(t, tracks))
+    ready, _ = mgr.ready()
+    out = None
+    for msg in ready:
+        out = mgr.step(msg, histories or {})
+    return out
+
+
+# ---------------------------------------------------------------- (a) manager glue
+
+def test_btracks_wait_for_own_ship_and_unmatched_ones_are_dropped():
+    mgr = TmaManager("a1")
+    mgr.push(btracks(20.0, []))
+    assert mgr.ready() == ([], 0)
+    mgr.add_own(20.0, 0.0, 60.0)
+    ready, dropped = mgr.ready()
+    assert [m["t"] for m in ready] == [20.0] and dropped == 0
+    mgr.push(btracks(40.0, []))
+    mgr.add_own(60.0, 0.0, 180.0)
+    mgr.push(btracks(60.0, []))
+    ready, dropped = mgr.ready()
+    assert [m["t"] for m in ready] == [60.0] and dropped == 1
+
+
+def test_own_log_is_bounded():
+    mgr = TmaManager("a1", TmaParams(own_keep=3))
+    for t in range(10):
+        mgr.add_own(float(t), 0.0, 0.0)
+    assert list(mgr.own) == [7.0, 8.0, 9.0]
+
+
+@pytest.mark.parametrize("msg, reason", [
+    (btracks(10.0, [], array="a2"), "unknown_array"),
+    (btracks(5.0, []), "time_order"),
+    (btracks(10.0, []), "time_order"),
+    (btracks(30.0, [{**btrack(1, 30.0), "P": [0.0] * 16}]), "bad_btrack"),
+    (btracks(30.0, [{**btrack(1, 30.0), "P": [1.0] * 9}]), "bad_btrack"),
+    (btracks(30.0, [{**btrack(1, 30.0), "x": [1.0]}]), "bad_btrack"),
+])
+def test_push_rejects_unusable_btracks(msg, reason):
+    mgr = TmaManager("a1")
+    mgr.push(btracks(10.0, []))
+    with pytest.raises(TmaInputError) as e:
+        mgr.push(msg)
+    assert e.value.reason == reason
+    assert len(mgr.pending) == 1
+
+
+def test_track_life_cycle_follows_btracks():
+    mgr = TmaManager("a1")
+    feed(mgr, 0.0, [btrack(1, 0.0, "tentative"), btrack(2, 0.0)])
+    assert set(mgr.tracks) == {2}
+    msg = btracks(20.0, [btrack(1, 20.0), btrack(2, 20.0)])
+    assert mgr.new_confirmed(msg) == [1]
+    feed(mgr, 20.0, msg["tracks"])
+    assert set(mgr.tracks) == {1, 2}
+    feed(mgr, 40.0, [btrack(1, 40.0)])
+    assert set(mgr.tracks) == {1}
+    feed(mgr, 60.0, [btrack(1, 60.0, "tentative")])  # number recycled by a new track
+    assert mgr.tracks == {}
+
+
+def test_history_start_gives_the_true_solution_at_once():
+    mgr = TmaManager("a1", TmaParams(cycle_dt=60.0))
+    times = np.arange(0.0, 1521.0, 20.0)
+    out = feed(mgr, 1520.0, [btrack(7, 1520.0)], {7: history(7, times)})
+    trk = mgr.tracks[7]
+    assert trk.tracker.t.size == times.size  # the btracks bearing at 1520 s is in the history
+    (s,) = out["solutions"]
+    x, y = TARGET[:2] + TARGET[2:] * 1520.0
+    assert s["track"] == 7 and s["t"] == 1520.0
+    assert s["x"] == pytest.approx(x, abs=1.0) and s["y"] == pytest.approx(y, abs=1.0)
+    assert s["vx"] == pytest.approx(TARGET[2], abs=1e-3) and s["vy"] == pytest.approx(TARGET[3], abs=1e-3)
+    assert s["range"] == pytest.approx(math.hypot(x - own_at(1520.0)[0], y - own_at(1520.0)[1]), rel=1e-4)
+    assert not s["constrained"] and s["bounds"] == pytest.approx(
+        [MINIMAL_BOUNDS.r_min, MINIMAL_BOUNDS.r_max, MINIMAL_BOUNDS.k_min, MINIMAL_BOUNDS.k_max,
+         MINIMAL_BOUNDS.v_min, MINIMAL_BOUNDS.v_max])
+    decoded = protocol.decode("tma", protocol.encode(out))
+    assert decoded["solutions"][0]["P"].shape == (16,)
+
+
+def test_without_history_the_track_builds_up_from_btracks():
+    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
+    outs = [feed(mgr, t, [btrack(3, t)], {3: None}) for t in np.arange(0.0, 1801.0, 20.0)]
+    assert outs[2]["solutions"] == [] and len(outs[3]["solutions"]) == 1  # 4 bearings needed
+    s = outs[-1]["solutions"][0]
+    assert s["x"] == pytest.approx(TARGET[0] + TARGET[2] * 1800.0, abs=1.0)
+    assert s["phase"] == "post"
+
+
+def test_cycle_decimation_and_bearing_thinning():
+    mgr = TmaManager("a1", TmaParams(cycle_dt=60.0, sample_dt=40.0))
+    times = np.arange(0.0, 1201.0, 20.0)
+    sol_t = []
+    for t in times:
+        out = feed(mgr, t, [btrack(1, t)], {1: None})
+        sol_t.append(out["solutions"][0]["t"] if out["solutions"] else None)
+    assert mgr.tracks[1].tracker.t.tolist() == times[::2].tolist()
+    assert mgr.cycles == 21  # cycles at 0, 60, ..., 1200 s
+    assert sol_t[-1] == 1200.0 and sol_t[-2] == 1120.0 and sol_t[-3] == 1120.0
+
+
+def test_thin_hand_values():
+    t = np.array([0.0, 10.0, 20.0, 25.0, 45.0, 50.0])
+    assert thin(t, 20.0, -np.inf).tolist() == [True, False, True, False, True, False]
+    assert thin(t, 20.0, 5.0).tolist() == [False, False, False, True, True, False]
+    assert thin(t, 0.0, -np.inf).all()
+
+
+def test_ambiguous_bearings_are_not_used():
+    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
+    for t in (0.0, 20.0, 40.0):
+        feed(mgr, t, [btrack(1, t)])
+    feed(mgr, 60.0, [btrack(1, 60.0, ambiguous=True, brg=1.0)])
+    feed(mgr, 80.0, [btrack(1, 80.0)])
+    assert mgr.tracks[1].tracker.t.tolist() == [0.0, 20.0, 40.0, 80.0]
+
+
+def test_a_collision_course_fails_alone():
+    """Constant bearing (relative velocity along the line of sight): range unobservable."""
+    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
+    for t in np.arange(0.0, 401.0, 20.0):
+        out = feed(mgr, t, [btrack(1, t), btrack(2, t, brg=math.atan2(3.0, 2.0))])
+    assert mgr.tracks[2].failures > 0 and mgr.tracks[1].failures == 0
+    s1, s2 = out["solutions"]
+    assert s1["t"] == 400.0 and s2["t"] < 400.0  # track 2 keeps its last good solution
+
+
+def _bounds_msg(**kw: Any) -> dict[str, Any]:
+    msg = {"v": 1, "t": 0.0, "r_min": 1000.0, "r_max": 20000.0, "course_min": 0.0,
+           "course_max": TWO_PI, "speed_min": 0.5, "speed_max": 8.0}
+    msg.update(kw)
+    return msg
+
+
+def test_bounds_messages_apply_to_all_or_one_track():
+    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
+    times = np.arange(0.0, 1501.0, 20.0)
+    feed(mgr, 1500.0, [btrack(1, 1500.0), btrack(2, 1500.0)], {1: history(1, times), 2: history(2, times)})
+    assert mgr.set_bounds(_bounds_msg()) == [1, 2]
+    out = feed(mgr, 1520.0, [btrack(1, 1520.0), btrack(2, 1520.0)])
+    assert all(s["bounds"] == pytest.approx([1000.0, 20000.0, 0.0, TWO_PI, 0.5, 8.0]) for s in out["solutions"])
+    assert mgr.bounds == Bounds(1000.0, 20000.0, 0.0, TWO_PI, 0.5, 8.0)
+    # range of the truth is ~4.6 km: bounds of 8-20 km on track 2 make it a CTMA solution
+    assert mgr.set_bounds(_bounds_msg(track=2, r_min=8000.0)) == [2]
+    out = feed(mgr, 1540.0, [btrack(1, 1540.0), btrack(2, 1540.0)])
+    s1, s2 = out["solutions"]
+    assert not s1["constrained"] and s1["bounds"][0] == 1000.0
+    assert s2["constrained"] and s2["bounds"][0] == 8000.0 and s2["range"] >= 8000.0 - 1e-6
+    assert s2["phase"] == "pre" and s2["residual_factor"] > 1.0
+    with pytest.raises(TmaInputError, match="unknown_track"):
+        mgr.set_bounds(_bounds_msg(track=9))
+
+
+# ---------------------------------------------------------------- (b) bounds message, config
+
+@pytest.mark.parametrize("change, field", [
+    ({"r_min": -1.0}, "r_min"), ({"r_max": 0.0}, "r_max"), ({"course_min": 7.0}, "course_min"),
+    ({"course_max": -0.1}, "course_max"), ({"speed_min": -0.1}, "speed_min"),
+    ({"speed_max": float("nan")}, "speed_max"), ({"track": -1}, "track"), ({"track": 1.5}, "track"),
+    ({"r_min": "1000"}, "r_min"), ({"t": -1.0}, "t"),
+])
+def test_bounds_schema_rejects(change, field):
+    with pytest.raises(protocol.DecodeError) as e:
+        protocol.decode("tma_bounds", msgpack.packb(_bounds_msg(**change)))
+    assert e.value.field == field
+
+
+def test_bounds_schema_requires_every_bound():
+    msg = _bounds_msg()
+    del msg["speed_max"]
+    with pytest.raises(protocol.DecodeError, match="speed_max: missing"):
+        protocol.decode("tma_bounds", msgpack.packb(msg))
+    assert "track" not in protocol.decode("tma_bounds", msgpack.packb(_bounds_msg()))
+    assert protocol.decode("tma_bounds", msgpack.packb(_bounds_msg(track=3)))["track"] == 3
+
+
+@pytest.mark.parametrize("change", [
+    {"r_min": 20000.0}, {"r_min": 30000.0}, {"speed_min": 8.0}, {"speed_min": 9.0},
+])
+def test_bounds_context_checks(change):
+    with pytest.raises(TmaInputError, match="bad_bounds"):
+        make_bounds(_bounds_msg(**change))
+
+
+def test_course_bounds_wrap():
+    b = make_bounds(_bounds_msg(course_min=math.radians(300.0), course_max=math.radians(60.0)))
+    assert b.course_width == pytest.approx(math.radians(120.0))
+
+
+DOC = {"sonar": {"array": [{"id": "a1", "sigma0": 0.01}, {"id": "a2", "sigma0": 0.02}]}}
+
+
+def _cfg(tma: dict[str, Any]) -> Any:
+    return parse({**DOC, "sonar": {**DOC["sonar"], "tma": tma}})
+
+
+def test_config_defaults_and_per_array_bounds():
+    params, core, b = tma_config(parse(DOC), "a1")
+    assert params == TmaParams() and b == MINIMAL_BOUNDS and core.q1 == 2.0
+    cfg = _cfg({"cycle_dt": 120.0, "ctma": {"q1": 3.0},
+                "bounds": {"r_max": 30000.0, "speed_max": 10.0, "a2": {"r_min": 2000.0, "speed_max": 6.0}}})
+    params, core, b1 = tma_config(cfg, "a1")
+    _, _, b2 = tma_config(cfg, "a2")
+    assert params.cycle_dt == 120.0 and core.q1 == 3.0
+    assert (b1.r_min, b1.r_max, b1.v_max) == (MINIMAL_BOUNDS.r_min, 30000.0, 10.0)
+    assert (b2.r_min, b2.r_max, b2.v_max) == (2000.0, 30000.0, 6.0)
+
+
+@pytest.mark.parametrize("tma, key", [
+    ({"cycle": 1.0}, "sonar.tma.cycle"),
+    ({"ctmaa": {}}, "sonar.tma.ctmaa"),
+    ({"ctma": {"q9": 1.0}}, "sonar.tma.ctma.q9"),
+    ({"bounds": {"a3": {"r_min": 1.0}}}, "sonar.tma.bounds.a3"),
+    ({"bounds": {"r_min": "far"}}, "sonar.tma.bounds.a1.r_min"),
+    ({"bounds": {"a1": {"r_min": 200000.0}}}, "sonar.tma.bounds.a1"),
+])
+def test_config_errors_name_the_key(tma, key):
+    with pytest.raises(ConfigError) as e:
+        tma_config(_cfg(tma), "a1")
+    assert e.value.key == key
