@@ -23,7 +23,9 @@ Cycle at t (001 figure 7):
     contributor stay in pure prediction and are deleted after `max_coast` cycles;
     numbers are stable and recycled (common.track_table).
 A contributing elementary track that was not updated this scan keeps its membership
-but is not used as a measurement (its state is a pure prediction).
+but is not used as a measurement (its state is a pure prediction). When no block
+survives the k-sigma test (ranges mutually inconsistent at k sigma), module 64 is
+retried once at 2 k before the update is skipped.
 """
 
 from __future__ import annotations
@@ -258,9 +260,15 @@ class GlobalFusion:
                             self.tx, self.rx)
             x0 = x[live[multi]][:, POS]
             xg, Cg = gauss_newton(x0, c, z_min=self.p.z_min)
-            pos[multi], pos_cov[multi], _ = block_localise(  # module 64
+            pm, cm, _ = block_localise(  # module 64
                 xg, Cg, c, self.p.k_sigma, self.p.block_levels, self.p.z_min, self.p.z_max,
                 self.p.box_sigma)
+            empty = np.flatnonzero(~np.isfinite(pm).all(axis=1))
+            if empty.size:  # no block within k sigma of every range: retry at 2 k
+                pm[empty], cm[empty], _ = block_localise(
+                    xg[empty], Cg[empty], c.take(empty), 2 * self.p.k_sigma,
+                    self.p.block_levels, self.p.z_min, self.p.z_max, 2 * self.p.box_sigma)
+            pos[multi], pos_cov[multi] = pm, cm
         located = multi & np.isfinite(pos).all(axis=1)
         P_pos = P[live][:, POS][:, :, POS]
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, POS], P_pos,

@@ -171,11 +171,12 @@ def block_localise(
     total = np.bincount(owner, p, minlength=n).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         pm = p / total[owner]  # 001 [39]
-        mean = np.stack([np.bincount(owner, pm * pos[:, i], minlength=n) for i in range(3)], 1)
+        mean = np.stack([np.bincount(owner, pm * pos[:, i], minlength=n) for i in range(3)],
+                        1).astype(float)
         mean[total <= 0] = np.nan  # 001 [41], mean
         d = pos - mean[owner]
         cov = np.stack([np.bincount(owner, pm * d[:, i] * d[:, j], minlength=n)
-                        for i in range(3) for j in range(3)], 1).reshape(n, 3, 3)  # [41]
+                        for i in range(3) for j in range(3)], 1).reshape(n, 3, 3).astype(float)  # [41]
     cov = COV_CORRECTION * cov + within
     cov[total <= 0] = np.nan
     return mean, cov, np.bincount(owner, minlength=n)

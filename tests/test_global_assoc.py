@@ -1,0 +1,96 @@
+"""Tests of module 63 (common.global_assoc): g [47] Jacobian, distance [48], the
+two-best-candidates resolution loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from common.bistatic import project, project_jacobian
+from common.global_assoc import distance, projections, resolve
+
+TX = np.array([-35000.0, 20000.0, 300.0])
+RX = np.array([0.0, 0.0, 30.0])
+
+
+def test_g_jacobian_finite_differences() -> None:
+    rng = np.random.default_rng(2)
+    x = np.column_stack([rng.uniform(-6e4, 6e4, 20), rng.uniform(-250, 250, 20),
+                         rng.uniform(-6e4, 6e4, 20), rng.uniform(-250, 250, 20),
+                         rng.uniform(1e3, 1.2e4, 20), rng.uniform(-20, 20, 20)])
+    G = project_jacobian(x, TX, RX)
+    step = np.array([1.0, 1e-3, 1.0, 1e-3, 1.0, 1e-3])
+    for j in range(6):
+        dx = np.zeros(6)
+        dx[j] = step[j]
+        num = (project(x + dx, TX, RX) - project(x - dx, TX, RX)) / (2 * step[j])
+        np.testing.assert_allclose(G[:, :, j], num, rtol=1e-5, atol=1e-8)
+
+
+def test_distance_is_48() -> None:
+    x = np.array([[-30000.0, 200.0, 50000.0, -50.0, 9000.0, 0.0]])
+    P = np.diag([1e4, 25.0, 1e4, 25.0, 4e4, 1.0])[None]
+    y_pred, GPG = projections(x, P, TX, RX)
+    G = project_jacobian(x, TX, RX)[0]
+    np.testing.assert_allclose(GPG[0], G @ P[0] @ G.T)
+    R = np.diag([50.0**2, 1.0, np.radians(0.5) ** 2])[None]
+    y = y_pred + np.array([[100.0, -2.0, np.radians(0.3)]])
+    v = y[0] - y_pred[0]
+    expect = v @ np.linalg.solve(GPG[0] + R[0], v)  # [48]
+    assert distance(y_pred, GPG, y, R)[0] == pytest.approx(expect)
+    # the azimuth residual is wrapped: 2 pi away is the same measurement
+    y2 = y.copy()
+    y2[0, 2] += 2 * np.pi
+    assert distance(y_pred, GPG, y2, R)[0] == pytest.approx(expect)
+
+
+def test_resolution_loop_two_candidates() -> None:
+    # global track 10 sees etracks 1 (best) and 2; global track 11 is closer to 1.
+    # 10 has p1 = 1, p2 = 2 and n_inv = 11 exists -> 10 takes 2 (p1-10 invalidated);
+    # then 11 takes 1.
+    i = np.array([10, 10, 11])
+    m = np.array([1, 2, 1])
+    g = np.array([1.0, 2.0, 0.5])
+    ti, mi = resolve(i, m, g)
+    assert dict(zip(ti.tolist(), mi.tolist())) == {10: 2, 11: 1}
+    # without the competing global track, 10 keeps its most likely p1
+    ti, mi = resolve(i[:2], m[:2], g[:2])
+    assert dict(zip(ti.tolist(), mi.tolist())) == {10: 1}
+    # p1 only (no p2): associated even though 11 likes it more, as written
+    ti, mi = resolve(np.array([10, 11]), np.array([1, 1]), np.array([1.0, 0.5]))
+    assert dict(zip(ti.tolist(), mi.tolist())) == {10: 1}
+
+
+def _sequential(i: np.ndarray, m: np.ndarray, g: np.ndarray) -> dict[int, int]:
+    """The seed's loop literally, one global track after the other."""
+    G: dict[int, dict[int, float]] = {}
+    for a, b, c in zip(i.tolist(), m.tolist(), g.tolist()):
+        G.setdefault(a, {})[b] = c
+    taken: set[int] = set()
+    out = {}
+    for a in sorted(G):
+        cand = sorted((c, b) for b, c in G[a].items() if b not in taken)
+        if not cand:
+            continue
+        p1 = cand[0][1]
+        choice = p1
+        if len(cand) > 1:
+            n_inv = any(G[n].get(p1, np.inf) < G[a][p1] for n in G if n != a)
+            choice = cand[1][1] if n_inv else p1
+        out[a] = choice
+        taken.add(choice)
+    return out
+
+
+def test_resolution_loop_vectorised_equals_sequential() -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n = int(rng.integers(1, 60))
+        i = rng.integers(0, 15, n)
+        m = rng.integers(0, 15, n)
+        _, keep = np.unique(i * 100 + m, return_index=True)
+        i, m = i[keep], m[keep]
+        g = rng.uniform(0, 10, i.size)
+        ti, mi = resolve(i, m, g)
+        assert dict(zip(ti.tolist(), mi.tolist())) == _sequential(i, m, g)
+        assert len(set(mi.tolist())) == mi.size  # one global track per elementary track
