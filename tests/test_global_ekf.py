@@ -1,0 +1,136 @@
+"""Tests of module 65 (common.global_ekf) and of the cycle / management of module 61
+(common.global_fusion) on elementary tracks synthesised from truth."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from common import kalman
+from common.bistatic import POS, project
+from common.config import RadarBase
+from common.global_ekf import fused_update, observation
+from common.global_fusion import FusionParams, GlobalFusion
+
+RX = np.array([0.0, 0.0, 30.0])
+TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0], [5000.0, -52000.0, 400.0]])
+BASES = [RadarBase(f"b{k + 1}", TX[k], RX, ["c1"]) for k in range(3)]
+SIG = np.array([60.0, 0.7, np.radians(0.5)])
+
+
+def test_h_jacobian_finite_differences() -> None:
+    x = np.array([[-30000.0, 200.0, 50000.0, -50.0, 9000.0, 3.0],
+                  [50000.0, -120.0, -20000.0, 160.0, 7000.0, -2.0]])
+    h, H = observation(x, TX, np.tile(RX, (3, 1)))  # [53]-[54], [57]
+    for j in range(6):
+        dx = np.zeros(6)
+        dx[j] = 1e-2
+        num = (observation(x + dx, TX, np.tile(RX, (3, 1)))[0]
+               - observation(x - dx, TX, np.tile(RX, (3, 1)))[0]) / 2e-2
+        np.testing.assert_allclose(H[:, :, j], num, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(h[:, :3], x[:, POS])
+
+
+def test_padded_rows_equal_variable_dimension_update() -> None:
+    x = np.array([[-30000.0, 200.0, 50000.0, -50.0, 9000.0, 0.0]])
+    P = np.diag([1e4, 25.0, 1e4, 25.0, 4e4, 4.0])[None]
+    pos = x[:, POS] + [[50.0, -40.0, 300.0]]
+    pos_cov = np.diag([80.0**2, 100.0**2, 500.0**2])[None]
+    vb = np.array([[project(x, TX[k], RX)[0, 1] + 1.0 for k in range(3)]])
+    active = np.array([[True, False, True]])
+    rx = np.tile(RX, (3, 1))
+    x1, P1, nis = fused_update(x, P, pos, pos_cov, vb, np.full((1, 3), 0.5), active, TX, rx)
+    # reference: observation [x y z v_b1 v_b3] of dimension 3 + 2 only
+    h, H = observation(x, TX, rx)
+    keep = [0, 1, 2, 3, 5]
+    R = np.zeros((1, 5, 5))
+    R[0, :3, :3] = pos_cov[0]
+    R[0, 3, 3] = R[0, 4, 4] = 0.5
+    z = np.concatenate([pos, vb[:, [0, 2]]], axis=1)
+    x2, P2, S, _ = kalman.ekf_update(x, P, z, h[:, keep], H[:, keep], R)
+    np.testing.assert_allclose(x1, x2, rtol=1e-9)
+    np.testing.assert_allclose(P1, P2, rtol=1e-9, atol=1e-9)
+    y = z - h[:, keep]
+    assert nis[0] == pytest.approx(y[0] @ np.linalg.solve(S[0], y[0]))
+
+
+def _truth(t: float) -> np.ndarray:
+    p0 = np.array([[-30000.0, 50000.0, 9000.0], [50000.0, -20000.0, 7000.0]])
+    v = np.array([[200.0, -50.0, 0.0], [-120.0, 160.0, 0.0]])
+    s = np.zeros((2, 6))
+    s[:, POS], s[:, [1, 3, 5]] = p0 + v * t, v
+    return s
+
+
+def _messages(t: float, rng: np.random.Generator, drop: set[int] = frozenset()) -> list[dict]:
+    """etracks messages of the three bases: truth through g [47] plus white noise."""
+    s = _truth(t)
+    out = []
+    for k, b in enumerate(BASES):
+        y = project(s, b.tx, b.rx) + rng.standard_normal((2, 3)) * SIG
+        P = np.diag([SIG[0] ** 2, SIG[1] ** 2, 1.0, SIG[2] ** 2, 1e-6]).ravel().tolist()
+        tracks = [{"id": i + 1, "status": "confirmed", "x": [y[i, 0], y[i, 1], 0.0,
+                   y[i, 2] % (2 * np.pi), 0.0], "P": P, "score": 3.0, "n_ch": 3,
+                   "updated": True, "ambiguous": False} for i in range(2) if i not in drop]
+        out.append({"v": 1, "t": t, "base": b.id, "tracks": tracks})
+    return out
+
+
+def test_fusion_on_synthetic_elementary_tracks() -> None:
+    rng = np.random.default_rng(4)
+    gf = GlobalFusion(BASES, FusionParams())
+    ids_of: dict[int, set[int]] = {0: set(), 1: set()}
+    nees, err = [], []
+    for k in range(60):
+        outs = [o for m in _messages(float(k), rng) for o in gf.push(m)]
+        assert [o["t"] for o in outs] == [float(k)]  # the third base completes the cycle
+        tracks = outs[0]["tracks"]
+        assert len(tracks) == 2
+        s = _truth(float(k))
+        for tr in tracks:
+            x, P = np.array(tr["x"]), np.array(tr["P"]).reshape(6, 6)
+            i = int(np.argmin(np.linalg.norm(s[:, POS] - x[POS], axis=1)))
+            ids_of[i].add(tr["id"])
+            assert tr["score"] == pytest.approx(9.0)  # sum of 3 elementary scores
+            assert len(tr["etracks"]) == 3
+            if k >= 10:
+                assert tr["status"] == "confirmed"
+                e = x - s[i]
+                nees.append(e @ np.linalg.solve(P, e))
+                err.append(np.linalg.norm(e[POS]))
+    assert all(len(v) == 1 for v in ids_of.values())  # stable numbers
+    assert np.sqrt(np.mean(np.square(err))) < 150.0
+    assert 4.0 < np.mean(nees) < 9.0, np.mean(nees)
+
+
+def test_pure_prediction_deletion_and_recycling() -> None:
+    rng = np.random.default_rng(8)
+    gf = GlobalFusion(BASES, FusionParams(max_coast=3))
+    for k in range(8):
+        out = [o for m in _messages(float(k), rng) for o in gf.push(m)][0]
+    ids = sorted(tr["id"] for tr in out["tracks"])
+    assert ids == [1, 2]
+    lost = None
+    for k in range(8, 14):  # target index 0 is no longer reported by any base
+        out = [o for m in _messages(float(k), rng, drop={0}) for o in gf.push(m)][0]
+        if lost is None:
+            lost = {tr["id"] for tr in out["tracks"] if not tr["etracks"]}
+            assert len(lost) == 1
+            gone = next(tr for tr in out["tracks"] if not tr["etracks"])
+            assert gone["score"] == 0.0 and gone["status"] == "coasting"
+    assert len(out["tracks"]) == 1  # deleted after max_coast cycles without contributors
+    for k in range(14, 18):  # the target comes back: a new track takes the freed number
+        out = [o for m in _messages(float(k), rng) for o in gf.push(m)][0]
+    assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
+
+
+def test_cycle_waits_for_late_base_within_max_wait() -> None:
+    rng = np.random.default_rng(9)
+    gf = GlobalFusion(BASES, FusionParams(max_wait=2.0))
+    m0, m1 = _messages(0.0, rng), _messages(1.0, rng)
+    assert gf.push(m0[0]) == [] and gf.push(m0[1]) == []
+    assert gf.push(m1[0]) == []  # b3 has not reported t = 0 nor later: wait
+    out = gf.push(m1[2])  # b3 reports t = 1: it moved past 0 -> cycle 0 runs without it
+    assert [o["t"] for o in out] == [0.0]
+    assert gf.is_late(0.0) and not gf.is_late(1.0)
+    assert [o["t"] for o in gf.push(m1[1])] == [1.0]
