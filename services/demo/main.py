@@ -1,25 +1,34 @@
-"""``pfusion demo``: the built-in scenarios through everything that exists, on a router
-of its own on a free loopback port, then a short summary.
+"""``pfusion demo``: the built-in radar and sonar scenarios through every service that
+exists, on a router of its own on a free loopback port; then a metrics table and two
+pictures (out/radar.png, out/sonar.png).
 
-Stage 1 (foundation): simulator -> router -> a collector that decodes and counts every
-message, checks per-key order and reports losses.
+The demo is a client like any user tool: it subscribes to the public keys, checks that
+nothing published was lost, and scores the tracks against the simulator's truth.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
-from collections import Counter, defaultdict
+import tomllib
+from collections import defaultdict
 from pathlib import Path
+from typing import Any
 
 from common import protocol
 from common.bus import Inbox, open_session
-from common.cli import add_common
+from common.cli import COMMANDS, add_common
 from common.config import ZenohConfig, load
+from common.deployment import ChildSpec, plan
 from common.procs import Child, start_router
+from common.simulator import load_scenario
+from services.demo.report import Collected, radar_table, sonar_table
 from services.watch.main import kind_of
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+BAR = 30
+QUIET_S = 2.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,17 +40,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 class Collector:
-    """Decodes every message under the root, counts per kind, checks seq order per key."""
+    """Decodes every message under the root; counts per-key order and losses."""
 
     def __init__(self, root: str) -> None:
         self.root = root
         self.inbox = Inbox()
-        self.count: Counter[str] = Counter()
+        self.by_kind: dict[str, list[dict[str, Any]]] = defaultdict(list)
         self.invalid = 0
         self.out_of_order = 0
         self.last_seq: dict[str, int] = {}
         self.published: list[int] = []
-        self.keys: dict[str, set[str]] = defaultdict(set)
+        self.sim_data = 0
+        self.last_arrival = time.monotonic()
 
     def drain(self) -> None:
         while (env := self.inbox.get(0.0)) is not None:
@@ -51,6 +61,7 @@ class Collector:
         kind = kind_of(key, self.root)
         if kind is None:
             return
+        self.last_arrival = time.monotonic()
         try:
             msg = protocol.decode(kind, payload)
         except protocol.DecodeError:
@@ -59,59 +70,101 @@ class Collector:
         if kind == "sim_status":
             self.published.append(msg["published"])
             return
-        self.count[kind] += 1
-        self.keys[kind].add(key)
+        self.by_kind[kind].append(msg)
+        if kind in ("plots", "detections") or kind.startswith("truth_"):
+            self.sim_data += 1
         if "seq" in msg:
             if msg["seq"] != self.last_seq.get(key, -1) + 1:
                 self.out_of_order += 1
             self.last_seq[key] = msg["seq"]
 
 
+def horizon(path: str) -> float:
+    """Duration of a scenario file (scenario seconds)."""
+    return load_scenario(tomllib.loads(Path(path).read_text())).duration
+
+
+def progress(col: Collector, durations: dict[str, float]) -> str:
+    parts = []
+    for name, kind in (("radar", "truth_radar"), ("sonar", "truth_sonar")):
+        msgs = col.by_kind.get(kind, [])
+        frac = min(1.0, (msgs[-1]["t"] / durations[name]) if msgs else 0.0)
+        n = int(frac * BAR)
+        parts.append(f"{name} [{'#' * n}{'.' * (BAR - n)}] {100 * frac:3.0f}%")
+    return "  ".join(parts)
+
+
 def main(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    for old in out.glob("*.log"):
+        old.unlink()
+    radar_cfg, sonar_cfg = load(args.radar), load(args.sonar)
+    root = radar_cfg.zenoh.root
+    durations = {"radar": horizon(args.radar), "sonar": horizon(args.sonar)}
     router, endpoint = start_router(log=out / "router.log")
-    root = load(args.radar).zenoh.root
+    specs: list[ChildSpec] = (plan(radar_cfg, args.radar, COMMANDS, [endpoint])
+                              + plan(sonar_cfg, args.sonar, COMMANDS, [endpoint]))
+    children: list[Child] = []
     col = Collector(root)
-    sims: list[Child] = []
     t0 = time.monotonic()
     try:
         with open_session(ZenohConfig([endpoint], [], root)) as session:
             sub = session.declare_subscriber(f"{root}/**", col.inbox.on_sample)
             token = session.liveliness().declare_token(f"{root}/alive/demo/collector")
+            children += [Child(s.name, *s.argv, log=out / f"{s.name.replace('/', '-')}.log")
+                         for s in specs]
+            waits = ["demo/collector", *[s.alive for s in specs]]
             for scenario in (args.radar, args.sonar):
-                sims.append(Child(
-                    "simulate", "simulate", "--config", scenario, "--scenario", scenario,
-                    "--connect", endpoint, "--seed", str(args.seed),
-                    "--wait-alive", "demo/collector", log=out / f"simulate-{Path(scenario).stem}.log",
-                ))
-            for sim in sims:
-                while sim.alive():
-                    col.drain()
-                    time.sleep(0.05)
-            deadline = time.monotonic() + 10
-            while len(col.published) < len(sims) and time.monotonic() < deadline:
+                argv = ["simulate", "--config", scenario, "--scenario", scenario,
+                        "--connect", endpoint, "--seed", str(args.seed), "--wait-timeout", "120"]
+                for w in waits:
+                    argv += ["--wait-alive", w]
+                children.append(Child("simulate", *argv, log=out / f"simulate-{Path(scenario).stem}.log"))
+            sims = children[len(specs):]
+            while any(s.alive() for s in sims) or len(col.published) < len(sims):
+                col.drain()
+                if sys.stderr.isatty():
+                    print(f"\r{progress(col, durations)}", end="", file=sys.stderr, flush=True)
+                if not any(s.alive() for s in sims) and time.monotonic() - col.last_arrival > 10:
+                    break
+                time.sleep(0.1)
+            while time.monotonic() - col.last_arrival < QUIET_S:
                 col.drain()
                 time.sleep(0.05)
-            col.drain()
+            print(f"\r{progress(col, durations)}", file=sys.stderr)
             token.undeclare()
             sub.undeclare()
     finally:
-        for sim in sims:
-            sim.stop()
+        for c in reversed(children):
+            c.stop()
         router.stop()
-    return report(col, time.monotonic() - t0, [s.proc.returncode for s in sims])
+    wall = time.monotonic() - t0
+    data = Collected(radar_cfg, sonar_cfg, col.by_kind)
+    return report(col, data, wall, [s.name for s in specs], out,
+                  [c.proc.returncode for c in children[len(specs):]])
 
 
-def report(col: Collector, wall: float, codes: list[int]) -> int:
-    """Print the summary; non-zero exit if anything was lost or a child failed."""
-    received = sum(col.count.values())
+def report(col: Collector, data: Collected, wall: float, services: list[str],
+           out: Path, sim_codes: list[int]) -> int:
+    """Print the summary and draw the pictures; non-zero if anything was lost."""
+    from services.demo.pictures import radar_picture, sonar_picture
+
     published = sum(col.published)
-    print(f"passive-fusion demo: {wall:.1f} s wall, router on loopback")
-    print(f"{'message kind':<14}{'keys':>6}{'messages':>10}")
-    for kind in sorted(col.count):
-        print(f"{kind:<14}{len(col.keys[kind]):>6}{col.count[kind]:>10}")
-    print(f"published {published}, received {received}, lost {published - received}, "
-          f"out of order {col.out_of_order}, invalid {col.invalid}")
-    ok = published == received and col.out_of_order == 0 and col.invalid == 0
-    return 0 if ok and all(c == 0 for c in codes) else 1
+    print(f"passive-fusion demo: {wall:.1f} s wall; services: {', '.join(services) or 'none'}")
+    print(f"simulator published {published} messages, received {col.sim_data}, "
+          f"lost {published - col.sim_data}, out of order {col.out_of_order}, "
+          f"invalid {col.invalid}")
+    print(f"{'message kind':<14}{'messages':>10}")
+    for kind in sorted(col.by_kind):
+        print(f"{kind:<14}{len(col.by_kind[kind]):>10}")
+    print()
+    print(radar_table(data))
+    print()
+    print(sonar_table(data))
+    radar_picture(data.radar_cfg, data.of("truth_radar"), data.of("gtracks"), out / "radar.png")
+    sonar_picture(data.of("detections"), data.of("btracks"), data.of("truth_sonar"),
+                  data.of("tma"), out / "sonar.png")
+    print(f"\npictures: {out / 'radar.png'}, {out / 'sonar.png'}; logs in {out}/")
+    ok = published == col.sim_data and col.out_of_order == 0 and col.invalid == 0
+    return 0 if ok and all(c == 0 for c in sim_codes) else 1
