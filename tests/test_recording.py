@@ -192,6 +192,7 @@ def test_record_then_replay_gives_the_same_tracks(tmp_path: Path) -> None:
         assert all(r.wait(30) == 0 for r in recorders)
         live = outputs(d, base_keys + ["radar/gtracks"])
         live_plots = [(k, m) for k, m in d.messages if "/plots/" in k]
+    assert records(plots)[-1].key == f"{ROOT}/sim/status"
     recorded = [r for r in records(plots) if "/plots/" in r.key]
     assert [r.key for r in recorded] == [k for k, _ in live_plots]
     assert len(recorded) == SCANS * 9
@@ -206,3 +207,20 @@ def test_record_then_replay_gives_the_same_tracks(tmp_path: Path) -> None:
         with Deployment(tmp_path / run) as d:
             fused.append(replay(d, etracks, fusion, ["radar/gtracks"]))
     same_outputs(fused[0], fused[1])
+
+
+def test_replay_then_record_again_gives_the_same_file_content(tmp_path: Path) -> None:
+    """Two key expressions, a simulator run: a recording replayed as fast as possible and
+    recorded again has the same records (key, payload) in the same order."""
+    first, second = tmp_path / "first.pfrec", tmp_path / "second.pfrec"
+    with Deployment(tmp_path) as d:
+        rec = d.start("record-first", "record", "radar/plots/b1/*", "sim/**", "--out", str(first))
+        d.simulate(Path(TWO_TARGETS), wait_alive=["record/first"])
+        assert rec.wait(30) == 0
+        rec = d.start("record-second", "record", "radar/plots/b1/*", "sim/**", "--out", str(second))
+        replay = d.start("replay", "replay", str(first), "--wait-alive", "record/second")
+        assert replay.wait(30) == 0 and rec.wait(30) == 0
+    a, b = records(first), records(second)
+    assert len(a) == SCANS * (3 + 1) + 1
+    assert a[-1].key == f"{ROOT}/sim/status"
+    assert [(r.key, r.payload) for r in a] == [(r.key, r.payload) for r in b]

@@ -1,6 +1,11 @@
 """``pfusion record KEYEXPR... --out run.pfrec``: write every sample of the key
 expressions (under the root) to a recording, for ``--duration`` seconds or, by default,
-until the simulator reports ``sim/status`` done (then ``--linger`` seconds more)."""
+until the simulator reports ``sim/status`` done (then ``--linger`` seconds more).
+
+One subscriber takes the whole root and the loop keeps the samples that match: every
+Zenoh callback subscriber has a delivery thread of its own, so samples of two
+subscribers would not keep their arrival order (sim/status overtook the last plots).
+"""
 
 from __future__ import annotations
 
@@ -42,18 +47,27 @@ class Stamped:
         self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes()))
 
 
+def finished(payload: bytes) -> bool:
+    """A sim/status payload that says the simulator is done."""
+    try:
+        return protocol.decode("sim_status", payload)["state"] == "done"
+    except protocol.DecodeError as e:
+        log.error("invalid sim/status ignored: %s", e)
+        return False
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     root = cfg.zenoh.root
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    inbox, done = Stamped(), Stamped()
+    inbox = Stamped()
+    wanted = [zenoh.KeyExpr(f"{root}/{k}") for k in args.keyexpr]
+    status_key = f"{root}/sim/status"
     out = Path(args.out)
     with open_session(cfg.zenoh) as session, out.open("wb") as f:
-        subs = [session.declare_subscriber(f"{root}/{k}", inbox.on_sample) for k in args.keyexpr]
-        if args.duration is None:
-            subs.append(session.declare_subscriber(f"{root}/sim/status", done.on_sample))
+        sub = session.declare_subscriber(f"{root}/**", inbox.on_sample)
         token = session.liveliness().declare_token(f"{root}/alive/record/{out.stem}")
         writer = RecordWriter(f, root, time.time())
         t0 = time.monotonic()
@@ -64,25 +78,18 @@ def main(args: argparse.Namespace) -> int:
             try:
                 stamp, key, payload = inbox.q.get(timeout=0.1)
             except queue.Empty:
-                stamp = None
-            if stamp is not None:
+                continue
+            if any(w.intersects(zenoh.KeyExpr(key)) for w in wanted):
                 last = max(last, stamp - t0)
                 writer.write(key, last, payload)
-            while not done.q.empty():
-                _, _, payload = done.q.get()
-                try:
-                    finished = protocol.decode("sim_status", payload)["state"] == "done"
-                except protocol.DecodeError as e:
-                    log.error("invalid sim/status ignored: %s", e)
-                    continue
-                if finished:
-                    end = min(end, time.monotonic() + args.linger)
+            if key == status_key and args.duration is None and finished(payload):
+                end = min(end, time.monotonic() + args.linger)
         token.undeclare()
-        for s in subs:
-            s.undeclare()
+        sub.undeclare()
         while not inbox.q.empty():
             stamp, key, payload = inbox.q.get()
-            last = max(last, stamp - t0)
-            writer.write(key, last, payload)
+            if any(w.intersects(zenoh.KeyExpr(key)) for w in wanted):
+                last = max(last, stamp - t0)
+                writer.write(key, last, payload)
     log.info("wrote %d records to %s", writer.count, out)
     return 0
