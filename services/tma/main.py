@@ -92,7 +92,7 @@ def main(args: argparse.Namespace) -> int:
                 return protocol.decode("history", reply.ok.payload.to_bytes())
             except protocol.DecodeError as e:
                 svc.reject(f"history:{e.field}", str(e), f"sonar/history/{arr.id}/{tid}")
-        svc.counters["history_missing"] += 1
+        svc.reject("history_missing", f"no history of track {tid} within {HISTORY_TIMEOUT_S} s", "sonar/history")
         return None
 
     def process() -> None:

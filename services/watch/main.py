@@ -14,7 +14,7 @@ from common.cli import add_common, load_config
 
 KIND_BY_CHUNK = {
     "plots": "plots", "fused": "fused", "etracks": "etracks", "gtracks": "gtracks",
-    "detections": "detections", "status": "sim_status", "btracks": "btracks", "tma": "tma",
+    "detections": "detections", "status": "sim_status", "btracks": "btracks",
 }
 
 
