@@ -42,12 +42,24 @@ from common.crossing import CrossingManager, CrossingParams
 from common.elementary_init import compatible, initial_state, propagate
 from common.gating import chi2_gate
 from common.motion import bistatic_F, bistatic_Q
-from common.plot_fusion import LateInput, Plots, window_pairs
+from common.plot_fusion import LateInput, Plots, overlap_pairs, window_pairs
 from common.track_table import Status, TrackTable
 
 H = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11], [22]
 MEAS = [0, 1, 3]  # state components observed by H
 AZ = 2  # azimuth component of a measurement y = [r_b, v_b, theta]
+NEAR_SIGMAS = 8.0  # crossing candidates: another track within this many sigmas
+
+
+def neighbours(z: np.ndarray, sigma: np.ndarray, k: float) -> np.ndarray:
+    """(N,) mask of points z = (r_b, theta) with another point j such that
+    |dz_c| <= k (sigma_c + sigma_jc) on both components (theta on the circle); a
+    superset of the pairs within k sqrt(sigma_c^2 + sigma_jc^2). Sweep on r_b."""
+    a, b = overlap_pairs(z[:, 0] - k * sigma[:, 0], z[:, 0] + k * sigma[:, 0])
+    ok = np.abs(wrap_pi(z[a, 1] - z[b, 1])) <= k * (sigma[a, 1] + sigma[b, 1])
+    mask = np.zeros(z.shape[0], dtype=bool)
+    mask[a[ok]] = mask[b[ok]] = True
+    return mask
 
 
 @dataclass(frozen=True)
@@ -204,15 +216,25 @@ class ElementaryTracker:
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Seed 004 on the predicted (r_b, theta) of confirmed/coasting tracks: (alpha,
         ambiguous) per track of idx; alpha = 1, not ambiguous for the others. The
-        density g has covariance P~ + R of the track's last plot on (r_b, theta)."""
+        density g has covariance P~ + R of the track's last plot on (r_b, theta).
+
+        Deviation (speed): only tracks with another one within NEAR_SIGMAS sigmas on
+        both r_b and theta are passed to the CrossingManager, whose test is O(N^2).
+        The others cannot be ambiguous (sup-norm test with S < NEAR_SIGMAS; eq. 13
+        neighbour sum below exp(-NEAR_SIGMAS^2 / 2)), but their proportions q of 004
+        are then counted only over the scans where they have such a neighbour."""
         alpha = np.ones(idx.size)
         amb = np.zeros(idx.size, dtype=bool)
         sel = np.flatnonzero(self.table.status[idx] != Status.TENTATIVE)
-        if not self.crossing_params.enabled or sel.size == 0:
+        if not self.crossing_params.enabled or sel.size < 2:
             return alpha, amb
         rc = [0, 3]
         cov = P[sel][:, rc][:, :, rc]
         cov[:, [0, 1], [0, 1]] += self.table.r[idx[sel]][:, [0, AZ]]
+        near = neighbours(x[sel][:, rc], np.sqrt(cov[:, [0, 1], [0, 1]]), NEAR_SIGMAS)
+        sel, cov = sel[near], cov[near]
+        if sel.size == 0:
+            return alpha, amb
         z_meas = np.full((idx.size, 2), np.nan)
         z_meas[rows] = plots.y[cols][:, [0, AZ]]
         alpha[sel], amb[sel] = self.crossing.step(

@@ -199,3 +199,15 @@ def test_crossing_flag_and_memory_mode() -> None:
     assert rep.ambiguous.all()
     F = seed_F(k - 7.0)
     np.testing.assert_allclose(rep.x, prev @ F.T)  # memory mode: prediction only
+
+
+def test_crossing_candidates_match_brute_force() -> None:
+    from common.elementary import neighbours
+    rng = np.random.default_rng(5)
+    z = np.column_stack([rng.uniform(0, 2e4, 300), rng.uniform(0, 2 * np.pi, 300)])
+    s = np.column_stack([rng.uniform(50, 150, 300), rng.uniform(0.005, 0.02, 300)])
+    d_rb = np.abs(z[:, None, 0] - z[None, :, 0]) <= 8 * (s[:, None, 0] + s[None, :, 0])
+    d_az = np.abs((z[:, None, 1] - z[None, :, 1] + np.pi) % (2 * np.pi) - np.pi)
+    close = d_rb & (d_az <= 8 * (s[:, None, 1] + s[None, :, 1]))
+    np.fill_diagonal(close, False)
+    assert neighbours(z, s, 8.0).tolist() == close.any(axis=1).tolist()
