@@ -153,6 +153,33 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "tma": TMA, "tma_bounds": TMA_BOUNDS,
 }
 
+# Key layout under the root -> message kind ("*" = one chunk: a base, channel, array, id).
+KEY_KINDS: tuple[tuple[tuple[str, ...], str], ...] = (
+    (("radar", "plots", "*", "*"), "plots"),
+    (("radar", "fused", "*"), "fused"),
+    (("radar", "etracks", "*"), "etracks"),
+    (("radar", "gtracks"), "gtracks"),
+    (("sonar", "detections", "*"), "detections"),
+    (("sonar", "btracks", "*"), "btracks"),
+    (("sonar", "history", "*", "*"), "history"),
+    (("sonar", "tma", "*"), "tma"),
+    (("sonar", "tma", "bounds", "*"), "tma_bounds"),
+    (("sim", "truth", "radar"), "truth_radar"),
+    (("sim", "truth", "sonar"), "truth_sonar"),
+    (("sim", "status"), "sim_status"),
+)
+
+
+def kind_of(key: str, root: str) -> str | None:
+    """The message kind of a full key under ``root`` (None: not a v1 data key)."""
+    if not key.startswith(root + "/"):
+        return None
+    parts = tuple(key[len(root) + 1:].split("/"))
+    for pattern, kind in KEY_KINDS:
+        if len(pattern) == len(parts) and all(p in ("*", c) for p, c in zip(pattern, parts)):
+            return kind
+    return None
+
 
 def _np_default(obj: Any) -> Any:
     if isinstance(obj, np.ndarray):

@@ -13,7 +13,7 @@ from common import protocol
 from common.bus import Inbox, open_session
 from common.config import ZenohConfig
 from common.procs import Child, start_router
-from services.watch.main import kind_of
+from common.protocol import kind_of
 
 ROOT = "pf/v1"
 REPO = Path(__file__).resolve().parents[1]

@@ -164,3 +164,16 @@ def test_fuzz_near_valid_maps_only_decode_error(case: tuple[str, bytes]) -> None
     except DecodeError:
         return
     assert out["v"] == 1 and math.isfinite(out["t"])
+
+
+@pytest.mark.parametrize("key,kind", [
+    ("pf/v1/radar/plots/b1/c2", "plots"), ("pf/v1/radar/fused/b1", "fused"),
+    ("pf/v1/radar/etracks/b3", "etracks"), ("pf/v1/radar/gtracks", "gtracks"),
+    ("pf/v1/sonar/detections/a1", "detections"), ("pf/v1/sonar/btracks/a1", "btracks"),
+    ("pf/v1/sonar/history/a1/7", "history"), ("pf/v1/sonar/tma/a1", "tma"),
+    ("pf/v1/sonar/tma/bounds/a1", "tma_bounds"), ("pf/v1/sim/truth/radar", "truth_radar"),
+    ("pf/v1/sim/status", "sim_status"), ("pf/v1/metrics/tma/a1", None),
+    ("pf/v1/alive/tma/a1", None), ("other/radar/gtracks", None), ("pf/v1/radar/plots/b1", None),
+])
+def test_kind_of_key(key: str, kind: str | None) -> None:
+    assert protocol.kind_of(key, "pf/v1") == kind

@@ -20,7 +20,7 @@ from common.cli import COMMANDS
 from common.config import ZenohConfig, load, parse
 from common.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
 from common.procs import pfusion_argv
-from services.watch.main import kind_of
+from common.protocol import kind_of
 
 REPO = Path(__file__).resolve().parents[1]
 TWO_TARGETS = str(REPO / "scenarios" / "two_targets.toml")

@@ -24,7 +24,7 @@ from common.deployment import ChildSpec, plan
 from common.procs import Child, start_router
 from common.simulator import load_scenario
 from services.demo.report import Collected, radar_table, sonar_table
-from services.watch.main import kind_of
+from common.protocol import kind_of
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BAR = 30

@@ -12,27 +12,10 @@ from common import protocol
 from common.bus import Inbox, open_session
 from common.cli import add_common, load_config
 
-KIND_BY_CHUNK = {
-    "plots": "plots", "fused": "fused", "etracks": "etracks", "gtracks": "gtracks",
-    "detections": "detections", "status": "sim_status", "btracks": "btracks",
-}
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p, config_required=False)
     p.add_argument("keyexpr", help="key expression under the root, e.g. 'radar/**'")
     p.add_argument("--count", type=int, default=0, help="exit after this many messages")
-
-
-def kind_of(key: str, root: str) -> str | None:
-    """The message type of a key under ``root`` (None if not a v1 data key)."""
-    parts = key[len(root) + 1:].split("/")
-    if parts[:2] == ["sim", "truth"] and len(parts) == 3:
-        return f"truth_{parts[2]}"
-    for chunk in parts[:2]:
-        if chunk in KIND_BY_CHUNK:
-            return KIND_BY_CHUNK[chunk]
-    return None
 
 
 def summary(key: str, msg: dict[str, Any]) -> str:
@@ -66,7 +49,7 @@ def main(args: argparse.Namespace) -> int:
             if env is None:
                 continue
             n += 1
-            kind = kind_of(env.key, root)
+            kind = protocol.kind_of(env.key, root)
             try:
                 msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
                 print(summary(env.key, msg), flush=True)
