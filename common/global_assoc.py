@@ -40,7 +40,14 @@ class ETrackSet:
     base: base index (into the fusion's base list); id: elementary track number;
     y (E, 3) = [r_b, v_b, theta] and R (E, 3, 3) its covariance (the elementary state
     restricted to these components, 001 module 63); score; confirmed, updated,
-    ambiguous: flags of the elementary track.
+    ambiguous: flags of the elementary track; z (E, 3), Rz (E, 3, 3), meas (E,): the
+    equivalent measurement of this scan (common.decorrelation) and whether it exists.
+
+    Association ([48], `gated_pairs`) and initialisation (module 62) use the estimate
+    (y, R): a one-off comparison or starting point, and the estimate is more accurate
+    than one scan's plot (its error is positively correlated with the global track's,
+    so [48] with G P G' + R is conservative). Localisation (64) and the EKF (65), which
+    accumulate information scan after scan, use (z, Rz) only.
     """
 
     base: np.ndarray
@@ -51,6 +58,9 @@ class ETrackSet:
     confirmed: np.ndarray
     updated: np.ndarray
     ambiguous: np.ndarray
+    z: np.ndarray
+    Rz: np.ndarray
+    meas: np.ndarray
 
     def __len__(self) -> int:
         return int(self.base.size)

@@ -22,8 +22,13 @@ Cycle at t (001 figure 7):
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction and are deleted after `max_coast` cycles;
     numbers are stable and recycled (common.track_table).
-A contributing elementary track that was not updated this scan keeps its membership
-but is not used as a measurement (its state is a pure prediction). When no block
+Decorrelation (complement of 001, common.decorrelation): modules 64-65 do not take the
+elementary tracks' filtered estimates as measurements (their errors are correlated in
+time, which made the global covariance far too small), but the equivalent measurement
+of the scan recovered from two successive reports of each elementary track, i.e. the
+fused plot that track used. A contributing elementary track without a measurement this
+scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
+Module 63 ([48]) and module 62 keep using the estimates (common.global_assoc says why). When no block
 survives the k-sigma test (ranges mutually inconsistent at k sigma), module 64 is
 retried once at 2 k before the update is skipped.
 """
@@ -40,6 +45,8 @@ from common import global_ekf
 from common.bistatic import POS
 from common.config import RadarBase
 from common.crossing import CrossingManager, CrossingParams
+from common.decorrelation import Decorrelator
+from common.elementary import ElementaryParams
 from common.gating import chi2_gate
 from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
 from common.global_init import InitParams, azimuth_pairs, pair_candidates, select
@@ -63,6 +70,8 @@ class FusionParams(InitParams):
     max_coast: deletion after this many cycles without contributors (module 61).
     max_wait: seconds of message time a cycle waits for a late base (see module doc).
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
+    eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
+        measurement against the elementary track's prediction (common.decorrelation).
     """
 
     block_levels: int = 3
@@ -76,23 +85,33 @@ class FusionParams(InitParams):
     max_coast: int = 5
     max_wait: float = 3.0
     init_confirmed_only: bool = True
+    eq_gate_prob: float = 0.99999
 
 
-def etrack_set(msgs: dict[int, dict[str, Any]]) -> ETrackSet:
-    """Stack the decoded etracks messages of one cycle, keyed by base index."""
-    tr = [(b, t) for b, m in msgs.items() for t in m["tracks"]]
+def etrack_set(msgs: dict[int, dict[str, Any]], decorrelator: Decorrelator, t: float
+               ) -> ETrackSet:
+    """Stack the decoded etracks messages of one cycle (keyed by base index) and their
+    equivalent measurements at t."""
+    tr = [(b, e) for b, m in msgs.items() for e in m["tracks"]]
     n = len(tr)
-    x = np.array([t["x"] for _, t in tr], dtype=float).reshape(n, 5)
-    P = np.array([t["P"] for _, t in tr], dtype=float).reshape(n, 5, 5)
+    x = np.array([e["x"] for _, e in tr], dtype=float).reshape(n, 5)
+    P = np.array([e["P"] for _, e in tr], dtype=float).reshape(n, 5, 5)
+    base = np.array([b for b, _ in tr], dtype=np.intp)
+    ids = np.array([e["id"] for _, e in tr], dtype=np.int64)
+    updated = np.array([e["updated"] for _, e in tr], dtype=bool)
+    ambiguous = np.array([e["ambiguous"] for _, e in tr], dtype=bool)
+    z, Rz, meas = np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros(n, dtype=bool)
+    for b in msgs:
+        k = np.flatnonzero(base == b)
+        eq = decorrelator.step(b, t, ids[k], x[k], P[k], updated[k], ambiguous[k])
+        z[k], Rz[k], meas[k] = eq.z, eq.R, eq.ok
+    y, R = x[:, YR], P[:, YR][:, :, YR]
+    z[~meas], Rz[~meas] = y[~meas], R[~meas]  # finite placeholders, masked by meas
     return ETrackSet(
-        base=np.array([b for b, _ in tr], dtype=np.intp),
-        id=np.array([t["id"] for _, t in tr], dtype=np.int64),
-        y=x[:, YR],
-        R=P[:, YR][:, :, YR],
-        score=np.array([t["score"] for _, t in tr], dtype=float),
-        confirmed=np.array([t["status"] == "confirmed" for _, t in tr], dtype=bool),
-        updated=np.array([t["updated"] for _, t in tr], dtype=bool),
-        ambiguous=np.array([t["ambiguous"] for _, t in tr], dtype=bool),
+        base=base, id=ids, y=y, R=R,
+        score=np.array([e["score"] for _, e in tr], dtype=float),
+        confirmed=np.array([e["status"] == "confirmed" for _, e in tr], dtype=bool),
+        updated=updated, ambiguous=ambiguous, z=z, Rz=Rz, meas=meas,
     )
 
 
@@ -100,8 +119,14 @@ class GlobalFusion:
     """Global Cartesian tracks from the elementary tracks of all bases (001 step 24)."""
 
     def __init__(self, bases: list[RadarBase], params: FusionParams | None = None,
-                 crossing: CrossingParams | None = None) -> None:
+                 crossing: CrossingParams | None = None,
+                 tracker: ElementaryParams | None = None) -> None:
+        """tracker: the elementary trackers' parameters ([radar.tracker]), for the F [19]
+        and Q [20] of the decorrelation."""
         self.p = params or FusionParams()
+        et = tracker or ElementaryParams()
+        self.decorrelator = Decorrelator(et.sigma_gamma, et.sigma_omega,
+                                         chi2_gate(self.p.eq_gate_prob, 3))
         self.init_p = InitParams(**{f.name: getattr(self.p, f.name)
                                     for f in dataclasses.fields(InitParams)})
         self.base_ids = [b.id for b in bases]
@@ -139,7 +164,7 @@ class GlobalFusion:
 
     def cycle(self, t: float, msgs: dict[int, dict[str, Any]]) -> dict[str, Any]:
         """One fusion cycle at time t with the messages of the bases that reported."""
-        E = etrack_set(msgs)
+        E = etrack_set(msgs, self.decorrelator, t)
         reported = np.zeros(len(self.base_ids), dtype=bool)
         reported[list(msgs)] = True
         tab = self.table
@@ -248,18 +273,18 @@ class GlobalFusion:
         """Crossing test (004), localisation (64) and EKF update (65) at time t."""
         tab = self.table
         r = row[live]
-        active = np.append(E.updated, False)[r] & ~np.isin(live, new)[:, None]
+        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
         n_act = active.sum(1)
         multi, single = n_act >= 2, n_act == 1
         pos = np.full((live.size, 3), np.nan)
         pos_cov = np.full((live.size, 3, 3), np.nan)
         if multi.any():
             rm = r[multi]
-            sig = np.sqrt(np.diagonal(E.R[rm], axis1=2, axis2=3))
-            c = Constraints(E.y[rm, 0], sig[..., 0], E.y[rm, 2], sig[..., 2], active[multi],
+            sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
+            c = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[multi],
                             self.tx, self.rx)
             x0 = x[live[multi]][:, POS]
-            xg, Cg = gauss_newton(x0, c, z_min=self.p.z_min)
+            xg, Cg = gauss_newton(x0, c, z_min=self.p.z_min, z_prior=self.p.z_prior)
             pm, cm, _ = block_localise(  # module 64
                 xg, Cg, c, self.p.k_sigma, self.p.block_levels, self.p.z_min, self.p.z_max,
                 self.p.box_sigma)
@@ -279,14 +304,14 @@ class GlobalFusion:
             s = live[located]
             rl = r[located]
             x[s], P[s], _ = global_ekf.fused_update(  # module 65
-                x[s], P[s], pos[located], infl * pos_cov[located], E.y[rl, 1],
-                infl * E.R[rl, 1, 1], active[located], self.tx, self.rx, alpha[located])
+                x[s], P[s], pos[located], infl * pos_cov[located], E.z[rl, 1],
+                infl * E.Rz[rl, 1, 1], active[located], self.tx, self.rx, alpha[located])
         if single.any():
             s = live[single]
             rs = r[single][active[single]]
             bs = np.nonzero(active[single])[1]
             x[s], P[s] = global_ekf.single_base_update(
-                x[s], P[s], E.y[rs], infl * E.R[rs], self.tx[bs], self.rx[bs], alpha[single])
+                x[s], P[s], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs], alpha[single])
         tab.x[live], tab.P[live] = x[live], P[live]
         tab.t_last[live] = t
         updated = located | single

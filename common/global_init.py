@@ -42,6 +42,9 @@ class InitParams:
         tracking).
     v_max: test 3, maximum speed (m/s).
     sigma_vz: the constant sigma of v_z in [45] (m/s).
+    z_prior_mean, z_prior_sigma: altitude prior (m) of the fine localisation, a
+        pseudo-measurement z ~ N(mean, sigma^2) (not in 001; common.localisation says
+        why); z_prior_sigma <= 0 switches it off.
     """
 
     az_gate_deg: float = 3.0
@@ -54,6 +57,13 @@ class InitParams:
     z_max: float = 20000.0
     v_max: float = 400.0
     sigma_vz: float = 10.0
+    z_prior_mean: float = 6000.0
+    z_prior_sigma: float = 4000.0
+
+    @property
+    def z_prior(self) -> tuple[float, float] | None:
+        """(mean, sigma) of the altitude prior, or None when switched off."""
+        return (self.z_prior_mean, self.z_prior_sigma) if self.z_prior_sigma > 0 else None
 
 
 def azimuth_pairs(az_a: np.ndarray, az_b: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
@@ -178,9 +188,9 @@ def pair_candidates(
                     np.ones(rows.shape, bool), tx[pb], rx[pb])
     x0 = rx[bi] + rel
     x0[:, 2] = np.clip(x0[:, 2], p.z_min, p.z_max)
-    xg, Cg = gauss_newton(x0, c, z_min=p.z_min)
+    xg, Cg = gauss_newton(x0, c, z_min=p.z_min, z_prior=p.z_prior)
     pos, cov, nb = block_localise(xg, Cg, c, p.k_sigma, p.init_block_levels, p.z_min, p.z_max,
-                                  p.init_box_sigma)
+                                  p.init_box_sigma, z_prior=p.z_prior)
     ok = nb > 0  # test 2, fine: the two ellipsoids meet within k sigma
     rows, pos, cov, pb = rows[ok], pos[ok], cov[ok], pb[ok]
     c = c.take(np.flatnonzero(ok))

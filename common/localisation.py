@@ -30,6 +30,15 @@ Deviations, each for a stated reason:
   axis) is added to [41] (the covariance of the mixture of boxes); it keeps the
   covariance positive definite when few blocks survive.
 * Azimuths follow the project convention (clockwise from North, atan2(dx, dy)).
+* Altitude prior (not in 001): with transmitters and receiver nearly coplanar, d r_b /
+  d z vanishes near the sensors' plane and the ellipsoids are symmetric about it, so 3-D
+  position from two bases is ill-posed at low elevation (a banana-shaped zone, and its
+  mirror below the plane). z >= z_min removes the mirror; the optional pseudo-measurement
+  z ~ N(z_prior_mean, z_prior_sigma^2) (`z_prior`) regularises Gauss-Newton and weights
+  the blocks with a factor of the form [37] (so the 3/2 correction below still holds).
+  The caller decides where it may enter: once, in the initial state of a track (module
+  62); module 64 during tracking uses it only to centre and size the box (a prior in
+  every scan's measurement would be counted again at every EKF update).
 """
 
 from __future__ import annotations
@@ -79,15 +88,21 @@ def residuals(pos: np.ndarray, c: Constraints) -> tuple[np.ndarray, np.ndarray, 
 
 
 def gauss_newton(
-    x0: np.ndarray, c: Constraints, iterations: int = 5, z_min: float = 0.0
+    x0: np.ndarray, c: Constraints, iterations: int = 5, z_min: float = 0.0,
+    z_prior: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted least squares position from ranges and azimuths, started at x0 (N, 3).
 
     Returns the position (N, 3), z kept >= z_min, and the information inverse
     (J' W J)^-1 (N, 3, 3) at it (a tiny ridge keeps it finite when z is unobservable).
+    z_prior = (mean, sigma): the altitude pseudo-measurement z ~ N(mean, sigma^2) is
+    one more row of the least squares (module doc).
     """
     x = np.array(x0, dtype=float)
     w = c.valid.astype(float)
+    prior = np.zeros((3, 3))
+    if z_prior is not None:
+        prior[2, 2] = 1.0 / z_prior[1] ** 2
     for it in range(iterations + 1):
         d_t = x[:, None, :] - c.tx
         d_r = x[:, None, :] - c.rx
@@ -100,12 +115,15 @@ def gauss_newton(
         j_az[..., 1] = -d_r[..., 0] / rho2
         j_az *= (w / c.saz)[..., None]
         J = np.concatenate([j_rb, j_az], axis=1)
-        info = np.swapaxes(J, 1, 2) @ J + 1e-12 * np.eye(3)
+        info = np.swapaxes(J, 1, 2) @ J + prior + 1e-12 * np.eye(3)
         if it == iterations:
             break
         res_rb, res_az, _ = residuals(x, c)
         r = np.concatenate([res_rb * w / c.srb, res_az * w / c.saz], axis=1)
-        dx = np.linalg.solve(info, (np.swapaxes(J, 1, 2) @ r[..., None]))[..., 0]
+        g = (np.swapaxes(J, 1, 2) @ r[..., None])[..., 0]
+        if z_prior is not None:
+            g[:, 2] += (z_prior[0] - x[:, 2]) * prior[2, 2]
+        dx = np.linalg.solve(info, g[..., None])[..., 0]
         x = x + dx
         x[:, 2] = np.maximum(x[:, 2], z_min)
     return x, np.linalg.inv(info)
@@ -145,9 +163,12 @@ def block_localise(
     box_sigma: float = 4.0,
     min_half: float = 25.0,
     max_half: float = 30000.0,
+    z_prior: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blocks around x0 (N, 3) sized by C0 (N, 3, 3) -> (mean (N, 3), cov (N, 3, 3),
-    n_blocks (N,)); mean and cov are NaN where no block survives (no intersection)."""
+    n_blocks (N,)); mean and cov are NaN where no block survives (no intersection).
+    z_prior = (mean, sigma): the altitude prior multiplies the weight [39] of each
+    block by a factor of the form [37] (module doc)."""
     n = x0.shape[0]
     if n == 0:
         return np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0, dtype=np.intp)
@@ -168,6 +189,8 @@ def block_localise(
     p_rb = 1.0 - erf(np.abs(res_rb) / (cm.srb * np.sqrt(2.0)))  # 001 [37]
     p_az = 1.0 - erf(np.abs(res_az) / (cm.saz * np.sqrt(2.0)))  # [37] for the azimuth
     p = np.prod(np.where(cm.valid, p_rb * p_az, 1.0), axis=1)
+    if z_prior is not None:
+        p = p * (1.0 - erf(np.abs(pos[:, 2] - z_prior[0]) / (z_prior[1] * np.sqrt(2.0))))
     total = np.bincount(owner, p, minlength=n).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         pm = p / total[owner]  # 001 [39]

@@ -10,7 +10,11 @@ from common import kalman
 from common.bistatic import POS, project
 from common.config import RadarBase
 from common.global_ekf import fused_update, observation
-from common.global_fusion import FusionParams, GlobalFusion
+from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.global_fusion import STATUS_NAME, FusionParams, GlobalFusion
+from common.plot_fusion import Plots
+
+STATUS = {int(k): v for k, v in STATUS_NAME.items()}
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0], [5000.0, -52000.0, 400.0]])
@@ -62,36 +66,58 @@ def _truth(t: float) -> np.ndarray:
     return s
 
 
-def _messages(t: float, rng: np.random.Generator, drop: set[int] = frozenset()) -> list[dict]:
-    """etracks messages of the three bases: truth through g [47] plus white noise."""
-    s = _truth(t)
-    out = []
-    for k, b in enumerate(BASES):
-        y = project(s, b.tx, b.rx) + rng.standard_normal((2, 3)) * SIG
-        P = np.diag([SIG[0] ** 2, SIG[1] ** 2, 1.0, SIG[2] ** 2, 1e-6]).ravel().tolist()
-        tracks = [{"id": i + 1, "status": "confirmed", "x": [y[i, 0], y[i, 1], 0.0,
-                   y[i, 2] % (2 * np.pi), 0.0], "P": P, "score": 3.0, "n_ch": 3,
-                   "updated": True, "ambiguous": False} for i in range(2) if i not in drop]
-        out.append({"v": 1, "t": t, "base": b.id, "tracks": tracks})
-    return out
+class _Synth:
+    """etracks messages of the three bases as the chain produces them: truth through
+    g [47] plus white noise (plots of 3 channels) fed to real elementary trackers, one
+    per base and target so that elementary track number i + 1 is target i."""
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self.trk = {(b.id, i): ElementaryTracker(ElementaryParams(),
+                                                 RadarCrossingParams(enabled=False))
+                    for b in BASES for i in range(2)}
+
+    def messages(self, t: float, drop: set[int] = frozenset()) -> list[dict]:
+        """One message per base at t; targets in `drop` are left out of the reports."""
+        s = _truth(t)
+        out = []
+        for b in BASES:
+            y = project(s, b.tx, b.rx) + self.rng.standard_normal((2, 3)) * SIG
+            y[:, 2] %= 2 * np.pi
+            tracks = []
+            for i in range(2):
+                plot = Plots(*(np.array([v]) for v in (*y[i], *SIG)), np.array([3]))
+                r = self.trk[(b.id, i)].step(t, plot)
+                if i in drop:
+                    continue
+                tracks += [{"id": i + 1, "status": STATUS[int(r.status[k])], "x": r.x[k].tolist(),
+                            "P": r.P[k].ravel().tolist(), "score": float(r.score[k]),
+                            "n_ch": int(r.n_ch[k]), "updated": bool(r.updated[k]),
+                            "ambiguous": bool(r.ambiguous[k])} for k in range(len(r))]
+            out.append({"v": 1, "t": t, "base": b.id, "tracks": tracks})
+        return out
 
 
 def test_fusion_on_synthetic_elementary_tracks() -> None:
-    rng = np.random.default_rng(4)
+    syn = _Synth(np.random.default_rng(4))
     gf = GlobalFusion(BASES, FusionParams())
     ids_of: dict[int, set[int]] = {0: set(), 1: set()}
     nees, err = [], []
     for k in range(60):
-        outs = [o for m in _messages(float(k), rng) for o in gf.push(m)]
+        msgs = syn.messages(float(k))
+        outs = [o for m in msgs for o in gf.push(m)]
         assert [o["t"] for o in outs] == [float(k)]  # the third base completes the cycle
         tracks = outs[0]["tracks"]
+        if k < 2:  # elementary tracks open at k = 1 and are confirmed at k = 2
+            continue
         assert len(tracks) == 2
+        escore = {(m["base"], e["id"]): e["score"] for m in msgs for e in m["tracks"]}
         s = _truth(float(k))
         for tr in tracks:
             x, P = np.array(tr["x"]), np.array(tr["P"]).reshape(6, 6)
             i = int(np.argmin(np.linalg.norm(s[:, POS] - x[POS], axis=1)))
             ids_of[i].add(tr["id"])
-            assert tr["score"] == pytest.approx(9.0)  # sum of 3 elementary scores
+            assert tr["score"] == pytest.approx(sum(escore[tuple(e)] for e in tr["etracks"]))
             assert len(tr["etracks"]) == 3
             if k >= 10:
                 assert tr["status"] == "confirmed"
@@ -104,15 +130,15 @@ def test_fusion_on_synthetic_elementary_tracks() -> None:
 
 
 def test_pure_prediction_deletion_and_recycling() -> None:
-    rng = np.random.default_rng(8)
+    syn = _Synth(np.random.default_rng(8))
     gf = GlobalFusion(BASES, FusionParams(max_coast=3))
     for k in range(8):
-        out = [o for m in _messages(float(k), rng) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k)) for o in gf.push(m)][0]
     ids = sorted(tr["id"] for tr in out["tracks"])
     assert ids == [1, 2]
     lost = None
     for k in range(8, 14):  # target index 0 is no longer reported by any base
-        out = [o for m in _messages(float(k), rng, drop={0}) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k), drop={0}) for o in gf.push(m)][0]
         if lost is None:
             lost = {tr["id"] for tr in out["tracks"] if not tr["etracks"]}
             assert len(lost) == 1
@@ -120,14 +146,14 @@ def test_pure_prediction_deletion_and_recycling() -> None:
             assert gone["score"] == 0.0 and gone["status"] == "coasting"
     assert len(out["tracks"]) == 1  # deleted after max_coast cycles without contributors
     for k in range(14, 18):  # the target comes back: a new track takes the freed number
-        out = [o for m in _messages(float(k), rng) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k)) for o in gf.push(m)][0]
     assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
 
 
 def test_cycle_waits_for_late_base_within_max_wait() -> None:
-    rng = np.random.default_rng(9)
+    syn = _Synth(np.random.default_rng(9))
     gf = GlobalFusion(BASES, FusionParams(max_wait=2.0))
-    m0, m1 = _messages(0.0, rng), _messages(1.0, rng)
+    m0, m1 = syn.messages(0.0), syn.messages(1.0)
     assert gf.push(m0[0]) == [] and gf.push(m0[1]) == []
     assert gf.push(m1[0]) == []  # b3 has not reported t = 0 nor later: wait
     out = gf.push(m1[2])  # b3 reports t = 1: it moved past 0 -> cycle 0 runs without it

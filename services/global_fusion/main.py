@@ -6,7 +6,8 @@ live global track. The algorithm is common.global_fusion; this module only decod
 validates and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
 [radar.fusion_crossing] (CrossingParams); without that table the global tracks use the
 sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
-in m^3 as `volume`).
+in m^3 as `volume`). [radar.tracker] (ElementaryParams) gives the elementary trackers'
+F [19] / Q [20] noise, needed to recover their equivalent measurements.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from common import protocol
 from common.cli import add_common, load_config
 from common.config import ConfigError, section
 from common.crossing import CrossingParams
+from common.elementary import ElementaryParams
 from common.global_fusion import FusionParams, GlobalFusion
 from common.service import Rejected, Service
 
@@ -31,7 +33,8 @@ def main(args: argparse.Namespace) -> int:
     crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     try:
-        core = GlobalFusion(cfg.bases, params, crossing)
+        core = GlobalFusion(cfg.bases, params, crossing,
+                            section(cfg, "radar.tracker", ElementaryParams))
     except ValueError as e:
         raise ConfigError("radar.base", str(e)) from None
     svc = Service("global_fusion", "main", cfg)
