@@ -121,9 +121,9 @@ def mean_gospa(truth: list[np.ndarray], est: list[np.ndarray]) -> float:
                           for tr, es in zip(truth, est)]))
 
 
-def run_ours(run: BaseRun, params: ElementaryParams) -> dict:
+def run_ours(run: BaseRun, params: ElementaryParams, crossing: bool = True) -> dict:
     fusion = PlotFusion(run.base.channels, run.base.p)
-    tracker = ElementaryTracker(params, RadarCrossingParams())
+    tracker = ElementaryTracker(params, RadarCrossingParams(enabled=crossing))
     t_plot, t_track, n_plots = [], [], 0
     fused_scans, est = [], []
     for t, chans in run.scans:
@@ -205,9 +205,10 @@ def run_stonesoup(fused: list[tuple[float, Plots]], truth: list[np.ndarray],
     return {"track_ms": 1e3 * np.mean(times), "gospa": mean_gospa(truth[: len(est)], est)}
 
 
-def report(name: str, runs: list[BaseRun], params: ElementaryParams, ss_scans: int) -> None:
+def report(name: str, runs: list[BaseRun], params: ElementaryParams, ss_scans: int,
+           crossing: bool = True) -> None:
     for run in runs:
-        ours = run_ours(run, params)
+        ours = run_ours(run, params, crossing)
         line = (f"{name:>8} {run.base.id:>3} ch={len(run.base.channels)} "
                 f"plots/scan={ours['n_plots']:7.0f} | plotter {ours['plot_ms']:7.2f} ms/scan "
                 f"({ours['plots_per_s']:9.0f} plots/s) | tracker {ours['track_ms']:7.2f} ms/scan "
@@ -235,7 +236,9 @@ def main() -> None:
     params = ElementaryParams()
     report("dense", dense_runs(args.scans), params, args.stonesoup_scans)
     report("N=300", [synthetic_run(300, args.scans)], params, min(args.stonesoup_scans, 3))
-    report("N=1000", [synthetic_run(1000, args.scans)], params, 0)
+    big = [synthetic_run(1000, args.scans)]
+    report("N=1000", big, params, 0)
+    report("no-cross", big, params, 0, crossing=False)
 
 
 if __name__ == "__main__":
