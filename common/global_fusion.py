@@ -28,9 +28,11 @@ time, which made the global covariance far too small), but the equivalent measur
 of the scan recovered from two successive reports of each elementary track, i.e. the
 fused plot that track used. A contributing elementary track without a measurement this
 scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
-Module 63 ([48]) and module 62 keep using the estimates (common.global_assoc says why). When no block
-survives the k-sigma test (ranges mutually inconsistent at k sigma), module 64 is
-retried once at 2 k before the update is skipped.
+Module 63 ([48]) and module 62 keep using the estimates (common.global_assoc says why).
+Module 64 during tracking is linearised at the prediction
+(common.localisation.linearised_position, stated deviation: the per-scan block mean is
+biased for poorly observed altitudes); when its residuals fail the chi-square test
+(gate_prob) the track gets no position update this scan.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from common.elementary import ElementaryParams
 from common.gating import chi2_gate
 from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
 from common.global_init import InitParams, azimuth_pairs, pair_candidates, select
-from common.localisation import Constraints, block_localise, gauss_newton
+from common.localisation import Constraints, linearised_position
 from common.track_table import Status, TrackTable
 
 STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
@@ -61,8 +63,8 @@ STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
 class FusionParams(InitParams):
     """Parameters of `[radar.fusion]` (module 62 thresholds inherited from InitParams).
 
-    block_levels, box_sigma: module 64, subdivisions and box half-width (sigmas).
-    gate_prob: chi-square(3) probability of the gate gamma_max on [48].
+    gate_prob: chi-square(3) probability of the gate gamma_max on [48], and probability
+        of the consistency test of module 64 (chi-square, 2 x contributing bases).
     q, q_z: process noise powers sigma_vxy^2, sigma_vz^2 of [51] (m^2/s^3).
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
@@ -74,8 +76,6 @@ class FusionParams(InitParams):
         measurement against the elementary track's prediction (common.decorrelation).
     """
 
-    block_levels: int = 3
-    box_sigma: float = 4.0
     gate_prob: float = 0.999
     q: float = 4.0
     q_z: float = 1.0
@@ -141,6 +141,8 @@ class GlobalFusion:
                                           "ambiguous": ((), bool)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
+        self.chi2_gate = np.array([np.inf] + [chi2_gate(self.p.gate_prob, k)
+                                              for k in range(1, 2 * B + 1)])
         self.az_gate = np.radians(self.p.az_gate_deg)
         self.pending: dict[float, dict[int, dict[str, Any]]] = {}
         self.t_last: float | None = None
@@ -278,26 +280,24 @@ class GlobalFusion:
         multi, single = n_act >= 2, n_act == 1
         pos = np.full((live.size, 3), np.nan)
         pos_cov = np.full((live.size, 3, 3), np.nan)
+        post = np.full((live.size, 3), np.nan)
         if multi.any():
             rm = r[multi]
             sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
             c = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[multi],
                             self.tx, self.rx)
-            x0 = x[live[multi]][:, POS]
-            xg, Cg = gauss_newton(x0, c, z_min=self.p.z_min, z_prior=self.p.z_prior)
-            pm, cm, _ = block_localise(  # module 64
-                xg, Cg, c, self.p.k_sigma, self.p.block_levels, self.p.z_min, self.p.z_max,
-                self.p.box_sigma)
-            empty = np.flatnonzero(~np.isfinite(pm).all(axis=1))
-            if empty.size:  # no block within k sigma of every range: retry at 2 k
-                pm[empty], cm[empty], _ = block_localise(
-                    xg[empty], Cg[empty], c.take(empty), 2 * self.p.k_sigma,
-                    self.p.block_levels, self.p.z_min, self.p.z_max, 2 * self.p.box_sigma)
-            pos[multi], pos_cov[multi] = pm, cm
+            sm = live[multi]
+            zm, Rm, chi2, xm = linearised_position(  # module 64
+                x[sm][:, POS], P[sm][:, POS][:, :, POS], c, self.p.z_min)
+            ok = chi2 <= self.chi2_gate[2 * active[multi].sum(1)]
+            pos[multi] = np.where(ok[:, None], zm, np.nan)
+            pos_cov[multi] = Rm
+            post[multi] = xm
         located = multi & np.isfinite(pos).all(axis=1)
         P_pos = P[live][:, POS][:, :, POS]
+        post[~located] = np.nan
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, POS], P_pos,
-                                        z_meas=pos, n_meas=int(located.sum()))
+                                        z_meas=post, n_meas=int(located.sum()))
         tab.ambiguous[live] = amb
         infl = self.p.meas_inflation
         if located.any():

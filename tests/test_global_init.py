@@ -121,7 +121,9 @@ def test_initial_state_layout() -> None:
     v_cov = np.array([[[2.0, 0.3], [0.3, 3.0]]])
     x, P = initial_state(np.array([[1.0, 2.0, 3.0]]), pos_cov, np.array([[10.0, 20.0]]), v_cov, 5.0)
     np.testing.assert_allclose(x[0], [1, 10, 2, 20, 3, 0])  # [44]
-    np.testing.assert_allclose(P[0][np.ix_([0, 2, 4], [0, 2, 4])], pos_cov[0])  # [45]
+    # [45], with the z-(x, y) terms of [41] removed (stated deviation of initial_state)
+    np.testing.assert_allclose(P[0][np.ix_([0, 2, 4], [0, 2, 4])],
+                               [[4.0, 1.0, 0.0], [1.0, 9.0, 0.0], [0.0, 0.0, 16.0]])
     np.testing.assert_allclose(P[0][np.ix_([1, 3], [1, 3])], v_cov[0])
     assert P[0, 5, 5] == 25.0 and P[0, 0, 1] == 0.0 and P[0, 1, 2] == 0.0
 
