@@ -1,5 +1,10 @@
 """``pfusion simulate``: publish a scenario's channel plots, sonar detections and truth
-in scenario time, as fast as possible or at ``--speed`` times real time."""
+in scenario time, as fast as possible or at ``--speed`` times real time.
+
+``--repeat K --gap G`` publishes K seeded runs back to back (for swap statistics): run i
+uses seed + i and times shifted by i * (duration + G); each run is followed by G seconds
+of scans of the same scenario without targets (clutter only), in which trackers delete
+the run's tracks. Truth ids are the scenario's in every run; sequence numbers go on."""
 
 from __future__ import annotations
 
@@ -10,6 +15,7 @@ import signal
 import threading
 import time
 import tomllib
+from collections.abc import Iterator
 from pathlib import Path
 
 import zenoh
@@ -17,7 +23,9 @@ import zenoh
 from common import protocol
 from common.bus import open_session
 from common.cli import add_common, load_config
-from common.simulator import load_scenario, run_scenario
+from common.config import Config
+from common.sim_scenario import Scenario
+from common.simulator import Message, load_scenario, run_scenario
 
 log = logging.getLogger("simulate")
 
@@ -33,21 +41,52 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--wait-alive", action="append", default=[], metavar="SERVICE/INSTANCE",
                    help="wait until this service's liveliness token exists (repeatable)")
     p.add_argument("--wait-timeout", type=float, default=60.0)
+    p.add_argument("--repeat", type=int, default=1, metavar="K",
+                   help="publish K runs back to back: run i uses seed + i, times shifted by "
+                        "i * (duration + gap); truth ids repeat, sequence numbers go on")
+    p.add_argument("--gap", type=float, default=0.0, metavar="SECONDS",
+                   help="with --repeat: target-free scans (clutter only) after each run, so "
+                        "that trackers delete the run's tracks")
 
 
-def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: float) -> None:
-    """Block until every root/alive/<name> liveliness token is present."""
+def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat: int,
+             gap: float) -> Iterator[tuple[float, list[Message]]]:
+    """`repeat` runs of run_scenario back to back in scenario time, each followed by
+    `gap` seconds of the scenario without targets; seq renumbered per key."""
+    empty = dataclasses.replace(
+        scn, duration=gap,
+        radar=None if scn.radar is None else dataclasses.replace(scn.radar, targets=[]),
+        sonar=None if scn.sonar is None else dataclasses.replace(scn.sonar, targets=[]))
+    seqs: dict[str, int] = {}
+    for i in range(repeat):
+        offset = i * (scn.duration + gap)
+        parts = [(0.0, run_scenario(scn, cfg.bases, cfg.arrays, seed + i, n_scans))]
+        if gap > 0:
+            parts.append((scn.duration, run_scenario(empty, cfg.bases, cfg.arrays, seed + i)))
+        for shift, steps in parts:
+            for t, messages in steps:
+                t_run = t + shift + offset
+                for key, msg in messages:
+                    msg["t"] = t_run
+                    if "seq" in msg:
+                        msg["seq"] = seqs[key] = seqs.get(key, -1) + 1
+                yield t_run, messages
+
+
+def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: float,
+               stop: threading.Event) -> None:
+    """Block until every root/alive/<name> liveliness token is present (or ``stop``)."""
     deadline = time.monotonic() + timeout
     missing = set(names)
-    while missing:
+    while missing and not stop.is_set():
         for name in list(missing):
             if any(r.ok for r in session.liveliness().get(f"{root}/alive/{name}", timeout=1.0)):
                 missing.discard(name)
         if missing and time.monotonic() > deadline:
             raise TimeoutError(f"services not alive after {timeout} s: {sorted(missing)}")
         if missing:
-            time.sleep(0.1)
-    time.sleep(0.3)  # let subscriber declarations reach every router on the path
+            stop.wait(0.1)
+    stop.wait(0.3)  # let subscriber declarations reach every router on the path
 
 
 def main(args: argparse.Namespace) -> int:
@@ -58,6 +97,9 @@ def main(args: argparse.Namespace) -> int:
     except (OSError, tomllib.TOMLDecodeError, ValueError) as e:
         log.error("scenario %s: %s", path, e)
         return 2
+    if args.repeat < 1 or args.gap < 0:
+        log.error("--repeat must be >= 1 and --gap >= 0")
+        return 2
     if args.scans:
         period = min(s.scan_period for s in (scn.radar, scn.sonar) if s is not None)
         scn = dataclasses.replace(scn, duration=max(scn.duration, args.scans * period))
@@ -67,12 +109,12 @@ def main(args: argparse.Namespace) -> int:
     root = cfg.zenoh.root
     with open_session(cfg.zenoh) as session:
         token = session.liveliness().declare_token(f"{root}/alive/simulate/{path.stem}")
-        wait_alive(session, root, args.wait_alive, args.wait_timeout)
+        wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
         pubs: dict[str, zenoh.Publisher] = {}
         published = scans = 0
         t_first = t = 0.0
         wall0 = time.monotonic()
-        for t, messages in run_scenario(scn, cfg.bases, cfg.arrays, args.seed, args.scans):
+        for t, messages in repeated(scn, cfg, args.seed, args.scans, args.repeat, args.gap):
             if stop.is_set():
                 break
             if scans == 0:
