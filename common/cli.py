@@ -18,6 +18,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "simulate": ("services.simulator.main", "publish a scenario's plots, detections, truth"),
     "watch": ("services.watch.main", "print decoded messages of a key expression live"),
     "demo": ("services.demo.main", "run the built-in scenario end to end and summarise"),
+    "params": ("services.params.main", "print the configuration reference or check a file"),
     "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
     "tma": ("services.tma.main", "target motion analysis of one array's confirmed bearing tracks (002, 003)"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
@@ -41,8 +42,11 @@ def add_common(p: argparse.ArgumentParser, config_required: bool = True) -> None
 
 
 def load_config(args: argparse.Namespace) -> Config:
-    """The deployment config of ``args``, with --connect applied."""
+    """The deployment config of ``args`` (every table checked), with --connect applied."""
+    from common.sections import check_all
+
     cfg = load(args.config) if args.config else _empty_config()
+    check_all(cfg)
     if args.connect:
         z = cfg.zenoh
         cfg = Config(ZenohConfig(args.connect, [], z.root), cfg.bases, cfg.arrays, cfg.doc, cfg.path)

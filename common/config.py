@@ -117,14 +117,16 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
 
 
 def section(cfg: Config, dotted: str, cls: type[T]) -> T:
-    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent)."""
+    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent).
+
+    Nested tables are sections of their own (common.sections checks their names)."""
     table: Any = cfg.doc
     for part in dotted.split("."):
         table = table.get(part, {}) if isinstance(table, dict) else None
         if table is None:
             raise ConfigError(dotted, "expected a table")
     _check_table(table, dotted)
-    return _build(cls, table, dotted)
+    return _build(cls, {k: v for k, v in table.items() if not isinstance(v, dict)}, dotted)
 
 
 def _endpoint(ep: Any, key: str) -> str:

@@ -74,14 +74,20 @@ MINIMAL_BOUNDS = Bounds(100.0, 100e3, 0.0, TWO_PI, 0.1, 15.0)
 
 @dataclass(frozen=True)
 class CtmaConfig:
-    """Parameters of the TMA/CTMA cycle (``[sonar.tma]``).
+    """Parameters of the TMA/CTMA cycle (``[sonar.tma.ctma]``).
 
-    q1 > q2 > q3: residual-factor thresholds over 1, 2, 3 consecutive cycles (003 Fig. 4);
-    q_minimal: Q above which minimal bounds replace the corrected ones (003 Fig. 5);
-    edge_tol: fraction of an interval width within which a value is "on the edge";
-    edge_cycles: consecutive cycles on the edge that make an edge error;
-    roc_window / roc_threshold: convergence detector (relative spread of range);
-    tma_tol (m) / max_iter: Gauss-Newton stop rule of 002 claim 17.
+    q1, q2, q3: residual-factor thresholds (q1 > q2 > q3) over 1, 2, 3 consecutive
+        cycles (003 Fig. 4).
+    q_minimal: Q above which minimal bounds replace the corrected ones (003 Fig. 5).
+    edge_tol: fraction of an interval width within which a value is "on the edge".
+    edge_cycles: consecutive cycles on the edge that make an edge error.
+    max_corrections: bound corrections allowed per cycle (003 Fig. 5: 3).
+    roc_window, roc_threshold: convergence detector: cycles in the window and relative
+        spread of the estimated range below which the solution is "post" (003 Fig. 6).
+    tma_tol, max_iter: Gauss-Newton stop rule of 002 claim 17 (||Delta p|| in m) and
+        the iteration cap.
+    detect_manoeuvres: run the residual-based manoeuvre detector after convergence.
+    manoeuvre_p_false: false alarm probability of that detector (Bonferroni-corrected).
     """
 
     q1: float = 2.0

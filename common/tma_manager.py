@@ -37,9 +37,13 @@ class TmaInputError(ValueError):
 
 @dataclass(frozen=True)
 class TmaParams:
-    """``[sonar.tma]``: cycle_dt (s) between two TMA cycles of a track; sample_dt (s):
-    minimum spacing of the bearings kept; own_keep: own-ship positions kept for matching
-    btracks by time; max_pending: btracks messages waiting for their own-ship position."""
+    """``[sonar.tma]``: decimation and buffering of the TMA service.
+
+    cycle_dt: message-time seconds between two TMA cycles of a track.
+    sample_dt: minimum spacing (s) of the bearings kept for TMA (0: keep all).
+    own_keep: own-ship positions kept for matching btracks by time.
+    max_pending: btracks messages that may wait for their own-ship position.
+    """
 
     cycle_dt: float = 60.0
     sample_dt: float = 0.0
@@ -52,9 +56,14 @@ BOUNDS_FIELDS = ("r_min", "r_max", "course_min", "course_max", "speed_min", "spe
 
 @dataclass(frozen=True)
 class BoundsParams:
-    """``[sonar.tma.bounds]`` (and per-array ``[sonar.tma.bounds.<array>]``): range (m),
-    course interval clockwise from course_min to course_max (rad; equal = no course bound),
-    speed (m/s). Defaults: the minimal bounds of 003 Fig. 5."""
+    """``[sonar.tma.bounds]`` and per-array ``[sonar.tma.bounds.<array>]`` (003).
+
+    r_min, r_max: range bounds (m).
+    course_min, course_max: course interval clockwise from course_min to course_max
+        (rad; equal values mean no course bound).
+    speed_min, speed_max: speed bounds (m/s).
+    Defaults: the minimal bounds of 003 Fig. 5.
+    """
 
     r_min: float = MINIMAL_BOUNDS.r_min
     r_max: float = MINIMAL_BOUNDS.r_max
