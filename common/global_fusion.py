@@ -1,12 +1,21 @@
 """Module 61 of 001 (management) and the cycle of step 24, "fusion posterior".
 
-`GlobalFusion.push(msg)` takes one decoded `radar/etracks/<base>` message and returns
-the `radar/gtracks` messages of the cycles it completed. A cycle at time t runs when
-every base has reported t or a later time, or when some base is `max_wait` seconds
-(message time) past t; missing bases are then treated as not reporting (their
-memberships are kept, without measurement). With max_wait = 0 this is the literal
-rule "every base reported t, or any base reported a later time"; a positive value
-tolerates the normal reordering between the per-base processes.
+`GlobalFusion.push(msg, stale)` takes one decoded `radar/etracks/<base>` message and
+returns the `radar/gtracks` messages of the cycles it completed. A cycle at time t runs
+when every base that is not `stale` has reported t or a later time; stale bases (the
+caller's judgement, e.g. silent for some seconds of wall time: the service decides, the
+core has no clock) are treated as not reporting in that cycle (their memberships are
+kept, without measurement). Within a cycle the bases are processed in configured order,
+so the output depends neither on the arrival order of one cycle's messages nor on how
+the bases' streams interleave, as long as no base is declared stale.
+
+Deviation (stated): 001's rule "every base reported t, or any base reported a later
+time" (and a tolerance in message time) assumes that all bases run in lock step with
+real time. When the chain runs faster than real time (replay, simulation) the per-base
+processes drift apart by tens of scans; a message-time rule then ran cycles without a
+base that was merely slow, rejected that base's report as late, and made the output
+depend on process timing (measured on crossing.toml: lags of up to 29 scans between
+bases at the fusion's input, different tracks from run to run).
 
 Cycle at t (001 figure 7):
   predict every global track to t ([55]-[56]);
@@ -70,7 +79,8 @@ class FusionParams(InitParams):
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
         at least this many contributing updated elementary tracks.
     max_coast: deletion after this many cycles without contributors (module 61).
-    max_wait: seconds of message time a cycle waits for a late base (see module doc).
+    max_wait: seconds of wall time without a message after which the service declares
+        a base stale (module doc; used by services/global_fusion, not by the core).
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
     eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
         measurement against the elementary track's prediction (common.decorrelation).
@@ -151,21 +161,25 @@ class GlobalFusion:
         """True if a message of time t arrives after its cycle already ran."""
         return self.t_last is not None and t <= self.t_last
 
-    def push(self, msg: dict[str, Any]) -> list[dict[str, Any]]:
-        """Buffer one etracks message (known base, not late); run completed cycles."""
+    def push(self, msg: dict[str, Any], stale: frozenset[str] = frozenset()
+             ) -> list[dict[str, Any]]:
+        """Buffer one etracks message (known base, not late); run the cycles completed
+        by the bases not in `stale` (base ids), oldest first."""
         self.pending.setdefault(msg["t"], {})[self.index[msg["base"]]] = msg
+        need = {self.index[b] for b in self.base_ids if b not in stale}
         out = []
         while self.pending:
             t0 = min(self.pending)
             seen = {b for m in self.pending.values() for b in m}
-            waited = max(self.pending) - t0 > self.p.max_wait
-            if len(seen) < len(self.base_ids) and not waited:
-                break  # some base has reported neither t0 nor a later time
+            if not need <= seen:
+                break  # some live base has reported neither t0 nor a later time
             out.append(self.cycle(t0, self.pending.pop(t0)))
         return out
 
     def cycle(self, t: float, msgs: dict[int, dict[str, Any]]) -> dict[str, Any]:
-        """One fusion cycle at time t with the messages of the bases that reported."""
+        """One fusion cycle at time t with the messages of the bases that reported
+        (processed in configured base order, whatever the arrival order)."""
+        msgs = dict(sorted(msgs.items()))
         E = etrack_set(msgs, self.decorrelator, t)
         reported = np.zeros(len(self.base_ids), dtype=bool)
         reported[list(msgs)] = True

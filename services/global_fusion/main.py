@@ -8,11 +8,16 @@ validates and publishes. Parameters: [radar.fusion] (FusionParams) and, optional
 sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
 in m^3 as `volume`). [radar.tracker] (ElementaryParams) gives the elementary trackers'
 F [19] / Q [20] noise, needed to recover their equivalent measurements.
+
+Cycle rule: a base that has sent nothing for `max_wait` seconds of wall time (since its
+last message, or since the first message of any base) is stale; the core then runs
+cycles without it (common.global_fusion says why wall time and not message time).
 """
 
 from __future__ import annotations
 
 import argparse
+import time
 
 from common import protocol
 from common.cli import add_common, load_config
@@ -38,6 +43,7 @@ def main(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise ConfigError("radar.base", str(e)) from None
     svc = Service("global_fusion", "main", cfg)
+    heard: dict[str, float] = {}  # wall time of each base's last message
 
     def on_etracks(key: str, payload: bytes) -> None:
         msg = protocol.decode("etracks", payload)
@@ -47,7 +53,12 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("base_mismatch", f"base '{msg['base']}' published on {key}")
         if core.is_late(msg["t"]):
             raise Rejected("time_backwards", f"t={msg['t']} after the cycle of t={core.t_last}")
-        for out in core.push(msg):
+        now = time.monotonic()
+        for b in core.base_ids:  # a base never heard of is silent since the first message
+            heard.setdefault(b, now)
+        heard[msg["base"]] = now
+        stale = frozenset(b for b, t in heard.items() if now - t > params.max_wait)
+        for out in core.push(msg, stale):
             svc.last_t = out["t"]
             svc.publish("radar/gtracks", out)
 
