@@ -43,6 +43,12 @@ far-point proportion is q''^k = 1 - q^k ("neglecting the tracks that were ambigu
 with k", eq. 10 text). Deviation: q is clipped to q_max < 1 so that r^k > 0;
 otherwise a track owning every point (r^k = 0) would be ambiguous for ever.
 
+Sparse evaluation: the sums of eq. 12-13 and the sup-norm test only look at the pairs
+(k, j) within a per-component box of track j's sigmas (`near_pairs`, a KD-tree, about
+O(N log N + pairs) instead of O(N^2)). The sup-norm test with radius S is exact.
+Deviation: eq. 12-13 drop the pairs outside CUTOFF_RADIUS = 7.43 sigma on some
+component, whose terms q^j g_j are below DENSITY_CUTOFF = 1e-12 of q^j g_j(0).
+
 Second order (004 eq. 14-16): the module only sees predictions Z^k produced by the
 tracker's own motion model, so a constant-acceleration tracker gets the order-3
 generalisation of eq. 12-13 (C + A dt + D dt^2) without further code here.
@@ -56,8 +62,13 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
 
 from common.angles import wrap_pi
+
+
+DENSITY_CUTOFF = 1e-12  # g terms below this fraction of their peak g_j(0) are dropped
+CUTOFF_RADIUS = float(np.sqrt(-2.0 * np.log(DENSITY_CUTOFF)))  # Mahalanobis 7.43
 
 
 @dataclass(frozen=True)
@@ -92,28 +103,67 @@ def _broadcast_cov(cov: ArrayLike, n: int, m: int) -> np.ndarray:
     return np.broadcast_to(c, (n, m, m)) if c.ndim == 2 else c
 
 
-def pairwise_diff(
-    a: np.ndarray, b: np.ndarray, angle_idx: Sequence[int] = ()
-) -> np.ndarray:
-    """d[k, j] = a_k - b_j, shape (N, M, m), angle_idx components wrapped to [-pi, pi)."""
-    d = np.asarray(a, dtype=float)[:, None, :] - np.asarray(b, dtype=float)[None, :, :]
+def _sigmas(cov: ArrayLike, n: int, m: int) -> np.ndarray:
+    """Standard deviations (N, m) of the components of each track's density g."""
+    return np.sqrt(np.diagonal(_broadcast_cov(cov, n, m), axis1=1, axis2=2))
+
+
+def wrapped_diff(a: np.ndarray, b: np.ndarray, angle_idx: Sequence[int] = ()) -> np.ndarray:
+    """a - b (broadcast, last axis = components), angle_idx components wrapped to [-pi, pi)."""
+    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
     if len(angle_idx):
         idx = list(angle_idx)
         d[..., idx] = wrap_pi(d[..., idx])
     return d
 
 
-def pairwise_density(d: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    """g_j(d[k, j]): zero-mean Gaussian density of covariance cov[j], shape (N, M).
+def _tree_coords(x: np.ndarray, centre: np.ndarray, scale: np.ndarray,
+                 box: np.ndarray) -> np.ndarray:
+    """KD-tree coordinates (x - centre) / scale; periodic components (box > 0) in [0, box)."""
+    c = (x - centre) / scale
+    per = box > 0.0
+    c[:, per] = np.mod(c[:, per], box[per])
+    c[:, per] = np.where(c[:, per] >= box[per], 0.0, c[:, per])  # mod rounding up to box
+    return c
 
-    The density of the pair (k, j) is the one of track j (the track whose points
-    would be mistaken for k's), as g(X - C^j) in 004 eq. 12.
+
+def near_pairs(
+    z_pred: np.ndarray,
+    sigma: np.ndarray,
+    radius: float,
+    angle_idx: Sequence[int] = (),
+    points: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All pairs (k, j), k != j, with |points_k,p - Z^j_p| / sigma_j,p <= radius on every
+    component p (angle_idx components on the circle), and their differences d (P, m);
+    points defaults to z_pred.
+
+    Sparse replacement of the all-pairs (N, N) evaluation: a KD-tree in the coordinates
+    z_p / max_j sigma_j,p (angle components on a torus of period 2 pi / max_j sigma_j,p)
+    returns the pairs within Chebyshev radius `radius` (inflated by 1e-9 against
+    rounding), a superset of the wanted ones; the exact per-pair test follows.
     """
-    m = d.shape[-1]
-    inv = np.linalg.inv(cov)
-    d2 = np.einsum("kjp,jpq,kjq->kj", d, inv, d)
-    norm = np.sqrt((2.0 * np.pi) ** m * np.linalg.det(cov))
-    return np.exp(-0.5 * d2) / norm[None, :]
+    n, m = z_pred.shape
+    if n < 2:
+        e = np.zeros(0, dtype=np.intp)
+        return e, e, np.zeros((0, m))
+    scale = sigma.max(axis=0)
+    box = np.zeros(m)
+    box[list(angle_idx)] = 2.0 * np.pi / scale[list(angle_idx)]
+    centre = np.where(box > 0.0, 0.0, z_pred.mean(axis=0))
+    tree_z = cKDTree(_tree_coords(z_pred, centre, scale, box), boxsize=box)
+    r_tree = radius * (1.0 + 1e-9)
+    if points is None:
+        points = z_pred
+        a, b = tree_z.query_pairs(r_tree, p=np.inf, output_type="ndarray").T
+        k, j = np.concatenate([a, b]), np.concatenate([b, a])
+    else:
+        tree_x = cKDTree(_tree_coords(points, centre, scale, box), boxsize=box)
+        found = tree_x.sparse_distance_matrix(tree_z, r_tree, p=np.inf, output_type="ndarray")
+        k, j = found["i"], found["j"]
+    d = wrapped_diff(points[k], z_pred[j], angle_idx)
+    keep = (k != j) & np.all(np.abs(d) / sigma[j] <= radius, axis=1)
+    return k[keep], j[keep], d[keep]
 
 
 def neighbour_sum(
@@ -123,11 +173,25 @@ def neighbour_sum(
     q: np.ndarray,
     angle_idx: Sequence[int] = (),
 ) -> np.ndarray:
-    """sum_{j != k} q^j g(points_k - Z^j), shape (N,): the sums of 004 eq. 12 and 13."""
+    """sum_{j != k} q^j g_j(points_k - Z^j), shape (N,): the sums of 004 eq. 12 and 13.
+
+    g_j is the zero-mean Gaussian density of covariance cov[j] (the track whose points
+    would be mistaken for k's, as g(X - C^j) in 004 eq. 12).
+    Deviation (speed): the sum runs over the pairs of `near_pairs` with radius
+    CUTOFF_RADIUS only. A dropped pair has |d_p| > CUTOFF_RADIUS sigma_j,p on some
+    component, hence d' cov_j^-1 d > CUTOFF_RADIUS^2 (the box bounds the ellipsoid),
+    and its term is below DENSITY_CUTOFF q^j g_j(0).
+    """
+    pts = None if points is z_pred else np.asarray(points, dtype=float)  # eq. 13: symmetric
+    z_pred = np.asarray(z_pred, dtype=float)
     n, m = z_pred.shape
-    g = pairwise_density(pairwise_diff(points, z_pred, angle_idx), _broadcast_cov(cov, n, m))
-    np.fill_diagonal(g, 0.0)
-    return g @ q
+    c = _broadcast_cov(cov, n, m)
+    k, j, d = near_pairs(z_pred, _sigmas(c, n, m), CUTOFF_RADIUS, angle_idx, pts)
+    inv = np.linalg.inv(c)
+    norm = np.sqrt((2.0 * np.pi) ** m * np.linalg.det(c))
+    d2 = np.einsum("pa,pab,pb->p", d, inv[j], d)
+    w = np.asarray(q, dtype=float)[j] * np.exp(-0.5 * d2) / norm[j]
+    return np.bincount(k, weights=w, minlength=n)
 
 
 def far_density(q: np.ndarray, volume: float) -> np.ndarray:
@@ -157,13 +221,13 @@ def supnorm_ambiguous(
     """Ambiguity flags (N,) bool; k is NOT ambiguous iff ||Z^k - Z^j|| > S for all j != k.
 
     ||X|| = sup_p |x_p| / sigma_p, sigma_p the standard deviation of component p in the
-    density g of track j (004, sup-norm alternative to eq. 13).
+    density g of track j (004, sup-norm alternative to eq. 13). The pairs with
+    ||Z^k - Z^j|| <= S are exactly those of `near_pairs` with radius S.
     """
+    z_pred = np.asarray(z_pred, dtype=float)
     n, m = z_pred.shape
-    sigma = np.sqrt(np.diagonal(_broadcast_cov(cov, n, m), axis1=1, axis2=2))
-    norm = np.max(np.abs(pairwise_diff(z_pred, z_pred, angle_idx)) / sigma[None, :, :], axis=2)
-    np.fill_diagonal(norm, np.inf)
-    return ~np.all(norm > S, axis=1)
+    k, _, _ = near_pairs(z_pred, _sigmas(cov, n, m), S, angle_idx)
+    return np.bincount(k, minlength=n) > 0
 
 
 def progressive_weight(

@@ -4,18 +4,56 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from common.crossing import (
+    CUTOFF_RADIUS,
+    DENSITY_CUTOFF,
     CrossingManager,
     CrossingParams,
     eq13_ambiguous,
+    far_density,
+    near_pairs,
     neighbour_sum,
-    pairwise_density,
-    pairwise_diff,
     progressive_weight,
     proportions,
     supnorm_ambiguous,
+    wrapped_diff,
 )
+
+
+def pairwise_diff(a: np.ndarray, b: np.ndarray, angle_idx=()) -> np.ndarray:
+    """Reference: d[k, j] = a_k - b_j (N, M, m), angle components wrapped."""
+    return wrapped_diff(np.asarray(a)[:, None, :], np.asarray(b)[None, :, :], angle_idx)
+
+
+def pairwise_density(d: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """Reference: g_j(d[k, j]) with the covariance cov[j] of track j, shape (N, M)."""
+    m = d.shape[-1]
+    d2 = np.einsum("kjp,jpq,kjq->kj", d, np.linalg.inv(cov), d)
+    return np.exp(-0.5 * d2) / np.sqrt((2.0 * np.pi) ** m * np.linalg.det(cov))[None, :]
+
+
+def _per_track(cov: np.ndarray, n: int) -> np.ndarray:
+    return np.broadcast_to(cov, (n, *cov.shape[-2:])) if cov.ndim == 2 else cov
+
+
+def dense_sum(points, z_pred, cov, q, angle_idx=()) -> np.ndarray:
+    """Reference all-pairs sum_{j != k} q^j g_j(points_k - Z^j) (004 eq. 12-13)."""
+    g = pairwise_density(pairwise_diff(points, z_pred, angle_idx), _per_track(cov, len(z_pred)))
+    np.fill_diagonal(g, 0.0)
+    return g @ q
+
+
+def dense_supnorm(z_pred, cov, S, angle_idx=()) -> np.ndarray:
+    """Reference all-pairs sup-norm test: ambiguous iff some j != k has ||Z^k - Z^j|| <= S."""
+    c = _per_track(cov, len(z_pred))
+    sigma = np.sqrt(np.diagonal(c, axis1=1, axis2=2))
+    norm = np.max(np.abs(pairwise_diff(z_pred, z_pred, angle_idx)) / sigma[None], axis=2)
+    np.fill_diagonal(norm, np.inf)
+    return ~np.all(norm > S, axis=1)
+
 
 SIG = 0.01  # bearing noise standard deviation (rad)
 COV = np.array([[SIG**2]])
@@ -164,3 +202,114 @@ def test_counts_update_proportions_used_by_eq12():
     assert amb.all()
     np.testing.assert_allclose(alpha, progressive_weight(x, z, COV, q, p.volume))
     assert alpha[0] != pytest.approx(0.006534466135117747, rel=1e-3)
+
+
+def test_sum_uses_covariance_of_track_j():
+    # d = (1, 2) under cov_1 = diag(1, 4): g = e^-1 / (2 pi sqrt(4)); d = (-1, -2) under
+    # cov_0 = I: g = e^-2.5 / (2 pi). With q = 1 the sums are those densities.
+    z = np.array([[1.0, 2.0], [0.0, 0.0]])
+    cov = np.array([np.diag([1.0, 4.0]), np.eye(2)])
+    s = neighbour_sum(z, z, cov, np.ones(2))
+    np.testing.assert_allclose(s, [np.exp(-2.5) / (2.0 * np.pi), 0.029274915762159584],
+                               rtol=1e-12)
+
+
+def test_cutoff_radius_matches_density_cutoff():
+    assert np.exp(-0.5 * CUTOFF_RADIUS**2) == pytest.approx(DENSITY_CUTOFF, rel=1e-9)
+
+
+@st.composite
+def problems(draw):
+    """Random crossing problems: clustered tracks (with duplicates and sigma-grid points),
+    angle components anywhere on the real line, shared or per-track (full) covariances."""
+    n = draw(st.integers(0, 30))
+    m = draw(st.integers(1, 3))
+    angle_idx = [p for p in range(m) if draw(st.booleans())]
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    base = 10.0 ** rng.uniform(-3.0, 3.0, m)
+    base[angle_idx] = 10.0 ** rng.uniform(-3.0, 0.6, len(angle_idx))
+    per_track = draw(st.booleans())
+    spread = draw(st.sampled_from([0.5, 3.0, 10.0, 50.0]))
+    if draw(st.booleans()):  # sigma grid: sup-norm distances exactly on integers
+        per_track = False
+        z = base * rng.integers(-6, 7, (n, m))
+    else:
+        z = rng.uniform(-1e4, 1e4, m) * base + rng.normal(0.0, spread, (n, m)) * base
+    z[:, angle_idx] += 2.0 * np.pi * rng.integers(-3, 4, (n, len(angle_idx)))
+    if n > 1 and draw(st.booleans()):
+        z[rng.integers(0, n, n // 3)] = z[rng.integers(0, n, n // 3)]
+    sig = base * rng.uniform(1.0, draw(st.sampled_from([1.0, 3.0, 30.0])) if per_track else 1.0,
+                             (n, m))
+    rho = rng.uniform(-0.9, 0.9, (n, m, m)) if draw(st.booleans()) else np.zeros((n, m, m))
+    corr = np.triu(rho, 1) + np.swapaxes(np.triu(rho, 1), 1, 2) + np.eye(m)
+    corr = corr @ np.swapaxes(corr, 1, 2)
+    corr /= np.sqrt(np.einsum("kii->ki", corr)[:, :, None] * np.einsum("kii->ki", corr)[:, None])
+    cov = sig[:, :, None] * corr * sig[:, None, :]
+    if not per_track:
+        cov = cov[0] if n else np.diag(base**2)
+    x = z + rng.normal(0.0, draw(st.sampled_from([0.0, 1.0, 5.0])), (n, m)) * base
+    q = rng.uniform(0.05, 0.95, n)
+    return z, x, cov, q, angle_idx
+
+
+def _sum_tol(dense: np.ndarray, z: np.ndarray, cov: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Tolerance of the sparse sums: rounding plus the dropped terms of the cutoff."""
+    c = _per_track(cov, len(z))
+    peak = 1.0 / np.sqrt((2.0 * np.pi) ** z.shape[1] * np.linalg.det(c))
+    return 1e-9 * dense + DENSITY_CUTOFF * np.sum(q * peak) + 1e-300
+
+
+@settings(max_examples=300, deadline=None)
+@given(problems(), st.sampled_from([0.5, 1.0, 3.0, 6.0]))
+def test_near_pairs_are_exactly_the_brute_force_pairs(problem, radius):
+    z, x, cov, _, angle_idx = problem
+    n, m = z.shape
+    sigma = np.sqrt(np.diagonal(_per_track(cov, n), axis1=1, axis2=2))
+    for pts in (z, x):
+        k, j, d = near_pairs(z, sigma, radius, angle_idx, None if pts is z else pts)
+        ref = np.all(np.abs(pairwise_diff(pts, z, angle_idx)) / sigma[None] <= radius, axis=2)
+        np.fill_diagonal(ref, False)
+        assert sorted(zip(k.tolist(), j.tolist())) == sorted(zip(*np.nonzero(ref)))
+        np.testing.assert_array_equal(d, pairwise_diff(pts, z, angle_idx)[k, j])
+
+
+@settings(max_examples=300, deadline=None)
+@given(problems(), st.sampled_from([1.0, 2.0, 3.0, 4.5]))
+def test_sparse_tests_match_all_pairs_reference(problem, S):
+    z, x, cov, q, angle_idx = problem
+    for pts in (z, x):
+        dense = dense_sum(pts, z, cov, q, angle_idx)
+        sparse = neighbour_sum(pts, z, cov, q, angle_idx)
+        assert np.all(np.abs(sparse - dense) <= _sum_tol(dense, z, cov, q))
+    np.testing.assert_array_equal(supnorm_ambiguous(z, cov, S, angle_idx),
+                                  dense_supnorm(z, cov, S, angle_idx))
+    thr = 0.1 * far_density(q, TWO_PI)
+    dense = dense_sum(z, z, cov, q, angle_idx)
+    clear = np.abs(dense - thr) > _sum_tol(dense, z, cov, q)
+    np.testing.assert_array_equal(eq13_ambiguous(z, cov, q, TWO_PI, 0.1, angle_idx)[clear],
+                                  ~(dense < thr)[clear])  # 004 eq. 13
+
+
+@pytest.mark.parametrize("method", ["eq13", "supnorm"])
+@pytest.mark.parametrize("mode", ["memory", "progressive"])
+@settings(max_examples=100, deadline=None)
+@given(problem=problems())
+def test_step_matches_all_pairs_reference(method, mode, problem):
+    z, x, cov, _, angle_idx = problem
+    p = CrossingParams(method=method, mode=mode, volume=1e-3)
+    n = len(z)
+    q = np.full(n, p.q_prior)  # proportions of tracks never seen
+    r = far_density(q, p.volume)
+    if method == "eq13":
+        dense = dense_sum(z, z, cov, q, angle_idx)
+        amb = ~(dense < p.epsilon * r)  # 004 eq. 13
+        clear = np.abs(dense - p.epsilon * r) > _sum_tol(dense, z, cov, q)
+    else:
+        amb, clear = dense_supnorm(z, cov, p.S, angle_idx), np.ones(n, dtype=bool)
+    if mode == "memory":
+        alpha = np.where(amb, 0.0, 1.0)
+    else:
+        alpha = np.where(amb, r / (r + dense_sum(x, z, cov, q, angle_idx)), 1.0)  # 004 eq. 12
+    got_alpha, got_amb = CrossingManager(p).step(0.0, np.arange(n), z, cov, x, n, angle_idx)
+    np.testing.assert_array_equal(got_amb[clear], amb[clear])
+    np.testing.assert_allclose(got_alpha[clear], alpha[clear], rtol=1e-9, atol=1e-9)
