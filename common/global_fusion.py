@@ -42,6 +42,14 @@ Module 64 during tracking is linearised at the prediction
 (common.localisation.linearised_position, stated deviation: the per-scan block mean is
 biased for poorly observed altitudes); when its residuals fail the chi-square test
 (gate_prob) the track gets no position update this scan.
+Process noise (complement of 001 [51], which uses one fixed Q): every track adapts its
+horizontal noise power q by continuous noise level adjustment (Bar-Shalom, Li and
+Kirubarajan, "Estimation with applications to tracking and navigation", 11.2): a fading
+memory average nu of its normalised innovation squared NIS / dim of the module 65
+updates (nu <- rho nu + (1 - rho) NIS / dim, rho = q_memory), and after every such update
+q <- clip(q * nu^q_gain, q_min, q_max). A fixed q sized for the 2 deg/s turn of
+two_targets.toml made the straight target's covariance far too large (mean NEES 1.88),
+a smaller one lost the turning target. q_z stays fixed (no vertical manoeuvres modelled).
 """
 
 from __future__ import annotations
@@ -74,7 +82,10 @@ class FusionParams(InitParams):
 
     gate_prob: chi-square(3) probability of the gate gamma_max on [48], and probability
         of the consistency test of module 64 (chi-square, 2 x contributing bases).
-    q, q_z: process noise powers sigma_vxy^2, sigma_vz^2 of [51] (m^2/s^3).
+    q, q_z: process noise powers sigma_vxy^2, sigma_vz^2 of [51] (m^2/s^3); q is the
+        initial value of every track's adapted q (module doc) and the PCRLB's model.
+    q_min, q_max, q_memory, q_gain: bounds, fading factor rho and exponent of the noise
+        level adjustment of q (module doc).
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
         at least this many contributing updated elementary tracks.
@@ -89,6 +100,10 @@ class FusionParams(InitParams):
     gate_prob: float = 0.999
     q: float = 4.0
     q_z: float = 1.0
+    q_min: float = 1.0
+    q_max: float = 25.0
+    q_memory: float = 0.6
+    q_gain: float = 1.0
     meas_inflation: float = 1.0
     confirm_cycles: int = 3
     confirm_bases: int = 2
@@ -148,7 +163,8 @@ class GlobalFusion:
         B = len(bases)
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "confirmed": ((), bool),
-                                          "ambiguous": ((), bool)})
+                                          "ambiguous": ((), bool), "q": ((), float),
+                                          "nu": ((), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.chi2_gate = np.array([np.inf] + [chi2_gate(self.p.gate_prob, k)
@@ -188,7 +204,7 @@ class GlobalFusion:
         x, P = tab.x.copy(), tab.P.copy()
         if live.size:
             x[live], P[live] = global_ekf.predict(tab.x[live], tab.P[live], t - tab.t_last[live],
-                                                  self.p.q, self.p.q_z)
+                                                  tab.q[live], self.p.q_z)
         row = self._confirm(live, x, P, E, reported)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
@@ -277,6 +293,7 @@ class GlobalFusion:
         tab = self.table
         slots = tab.add(win.size)
         tab.x[slots], tab.P[slots], tab.t_last[slots] = cand.x[win], cand.P[win], t
+        tab.q[slots], tab.nu[slots] = self.p.q, 1.0
         used = cand.rows[win]
         for k in range(2):
             tab.has[slots, E.base[used[:, k]]] = True
@@ -317,9 +334,10 @@ class GlobalFusion:
         if located.any():
             s = live[located]
             rl = r[located]
-            x[s], P[s], _ = global_ekf.fused_update(  # module 65
+            x[s], P[s], nis = global_ekf.fused_update(  # module 65
                 x[s], P[s], pos[located], infl * pos_cov[located], E.z[rl, 1],
                 infl * E.Rz[rl, 1, 1], active[located], self.tx, self.rx, alpha[located])
+            self._adapt_q(s, nis / (3 + active[located].sum(1)))
         if single.any():
             s = live[single]
             rs = r[single][active[single]]
@@ -335,6 +353,13 @@ class GlobalFusion:
         tab.status[live] = np.where(~updated & ~np.isin(live, new), Status.COASTING,
                                     np.where(tab.confirmed[live], Status.CONFIRMED,
                                              Status.TENTATIVE))
+
+    def _adapt_q(self, slots: np.ndarray, nis_ratio: np.ndarray) -> None:
+        """Noise level adjustment of q (module doc) after a module 65 update with
+        normalised innovation squared per degree of freedom `nis_ratio`."""
+        tab, p = self.table, self.p
+        tab.nu[slots] = p.q_memory * tab.nu[slots] + (1.0 - p.q_memory) * nis_ratio
+        tab.q[slots] = np.clip(tab.q[slots] * tab.nu[slots] ** p.q_gain, p.q_min, p.q_max)
 
     def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> dict[str, Any]:
         """Module 61: scores, deletion, recycling; the gtracks message of the cycle."""
