@@ -396,7 +396,7 @@ class BearingTracker:
         dims = self._cross_dims
         zp = (x[conf] @ self.H.T)
         Rp = self._R_diag(zp[:, 0], zp[:, 1], heading)
-        cov = (self.H @ P[conf] @ self.H.T + _diag(Rp))[:, dims][:, :, dims]
+        cov = _diag(Rp)[:, dims][:, :, dims]  # 004: g is the measurement noise density
         zm = np.full((N, self.m), np.nan)
         zm[rows] = z[cols]
         a, f = self.crossing.step(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import queue
 import socket
+import threading
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -54,6 +55,23 @@ def wait_port(port: int, timeout: float = 10.0) -> None:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"nothing listens on 127.0.0.1:{port}") from None
             time.sleep(0.05)
+
+
+def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: float,
+               stop: threading.Event | None = None) -> None:
+    """Block until every root/alive/<name> liveliness token is present (or ``stop``)."""
+    stop = stop or threading.Event()
+    deadline = time.monotonic() + timeout
+    missing = set(names)
+    while missing and not stop.is_set():
+        for name in list(missing):
+            if any(r.ok for r in session.liveliness().get(f"{root}/alive/{name}", timeout=1.0)):
+                missing.discard(name)
+        if missing and time.monotonic() > deadline:
+            raise TimeoutError(f"services not alive after {timeout} s: {sorted(missing)}")
+        if missing:
+            stop.wait(0.1)
+    stop.wait(0.3)  # let subscriber declarations reach every router on the path
 
 
 @dataclass(frozen=True)

@@ -95,6 +95,8 @@ class ElementaryParams:
 class RadarCrossingParams(CrossingParams):
     """Table [radar.crossing]: the fields of CrossingParams plus `enabled`.
 
+    enabled: run seed 004 crossing management on confirmed and coasting tracks.
+
     Radar defaults: volume is the (r_b, theta) domain 200 km x 2 pi (instead of 2 pi);
     max_duration is 10 s (instead of 60 s): in memory mode a track is extrapolated
     while ambiguous, and on the crossing scenario extrapolations longer than about ten
@@ -168,7 +170,7 @@ class ElementaryTracker:
         """Process the fused plots of time t; returns every live track."""
         if self.t is not None and t <= self.t:
             raise LateInput("time_backwards", f"fused scan t={t} not after t={self.t}")
-        p, tab = self.params, self.table
+        tab = self.table
         idx = tab.active_indices()
         x, P = self._predict(idx, t)
         z_pred = x[:, MEAS]
@@ -216,7 +218,7 @@ class ElementaryTracker:
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Seed 004 on the predicted (r_b, theta) of confirmed/coasting tracks: (alpha,
         ambiguous) per track of idx; alpha = 1, not ambiguous for the others. The
-        density g has covariance P~ + R of the track's last plot on (r_b, theta).
+        density g has covariance R of the track's last plot on (r_b, theta) (004).
 
         Deviation (speed): only tracks with another one within NEAR_SIGMAS sigmas on
         both r_b and theta are passed to the CrossingManager, whose test is O(N^2).
@@ -229,8 +231,8 @@ class ElementaryTracker:
         if not self.crossing_params.enabled or sel.size < 2:
             return alpha, amb
         rc = [0, 3]
-        cov = P[sel][:, rc][:, :, rc]
-        cov[:, [0, 1], [0, 1]] += self.table.r[idx[sel]][:, [0, AZ]]
+        cov = np.zeros((sel.size, 2, 2))  # 004: g is the measurement noise density (R)
+        cov[:, [0, 1], [0, 1]] = self.table.r[idx[sel]][:, [0, AZ]]
         near = neighbours(x[sel][:, rc], np.sqrt(cov[:, [0, 1], [0, 1]]), NEAR_SIGMAS)
         sel, cov = sel[near], cov[near]
         if sel.size == 0:

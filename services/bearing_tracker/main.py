@@ -29,8 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def btracks_message(array: str, c: Cycle, narrowband: bool) -> dict[str, Any]:
     """The btracks message of one cycle (docs/protocol.md)."""
-    n = c.ids.size
-    cols = zip(c.ids.tolist(), c.confirmed.tolist(), c.x.tolist(), c.P.reshape(n, -1).tolist(),
+    cols = zip(c.ids.tolist(), c.confirmed.tolist(), c.x.tolist(), [p.ravel().tolist() for p in c.P],
                c.quality.tolist(), c.ambiguous.tolist(), c.ml.tolist())
     tracks = []
     for tid, conf, x, P, q, amb, ml in cols:

@@ -12,10 +12,9 @@ from pathlib import Path
 
 import zenoh
 
-from common.bus import open_session
+from common.bus import open_session, wait_alive
 from common.cli import add_common, load_config
 from common.recording import RecordReader, RecordingError
-from services.simulator.main import wait_alive
 
 log = logging.getLogger("replay")
 
@@ -44,7 +43,7 @@ def main(args: argparse.Namespace) -> int:
             return 2
         root = cfg.zenoh.root if args.config else reader.root
         with open_session(cfg.zenoh) as session:
-            wait_alive(session, root, args.wait_alive, args.wait_timeout)
+            wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
             try:
                 n = replay(session, reader, root, args.speed, stop)
             except RecordingError as e:

@@ -21,7 +21,7 @@ from pathlib import Path
 import zenoh
 
 from common import protocol
-from common.bus import open_session
+from common.bus import open_session, wait_alive
 from common.cli import add_common, load_config
 from common.config import Config
 from common.sim_scenario import Scenario
@@ -71,22 +71,6 @@ def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat:
                     if "seq" in msg:
                         msg["seq"] = seqs[key] = seqs.get(key, -1) + 1
                 yield t_run, messages
-
-
-def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: float,
-               stop: threading.Event) -> None:
-    """Block until every root/alive/<name> liveliness token is present (or ``stop``)."""
-    deadline = time.monotonic() + timeout
-    missing = set(names)
-    while missing and not stop.is_set():
-        for name in list(missing):
-            if any(r.ok for r in session.liveliness().get(f"{root}/alive/{name}", timeout=1.0)):
-                missing.discard(name)
-        if missing and time.monotonic() > deadline:
-            raise TimeoutError(f"services not alive after {timeout} s: {sorted(missing)}")
-        if missing:
-            stop.wait(0.1)
-    stop.wait(0.3)  # let subscriber declarations reach every router on the path
 
 
 def main(args: argparse.Namespace) -> int:
