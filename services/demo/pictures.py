@@ -73,9 +73,15 @@ def radar_picture(cfg: Config, truth: list[Msg], gtracks: list[Msg], path: Path)
         ax.annotate(f"G{gid}", (a[-1, 0] * KM, a[-1, 2] * KM), color="blue",
                     textcoords="offset points", xytext=(6, -10))
     ax.plot([], [], "b-", label="global tracks (2-sigma)")
+    pts = np.vstack([rx[:2], *[b.tx[:2] for b in cfg.bases],
+                     *[p[:, :2] for p in _truth_paths(truth).values()]]) * KM
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = 0.1 * float(np.max(hi - lo))
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_xlabel("East (km)")
     ax.set_ylabel("North (km)")
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="box")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper right")
     ax.set_title("Multistatic passive radar: plan view")
