@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import queue
+import signal
 import socket
 import threading
 import time
@@ -35,6 +36,14 @@ def zenoh_config(
 def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
     """Open a session from a deployment's [zenoh] table (raises zenoh.ZError)."""
     return zenoh.open(zenoh_config(zc.connect, zc.listen, mode))
+
+
+def stop_on_signals() -> threading.Event:
+    """An event set by SIGINT or SIGTERM: the clean-exit flag of a tool's main loop."""
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    return stop
 
 
 def free_port() -> int:

@@ -12,8 +12,6 @@ from __future__ import annotations
 import argparse
 import logging
 import queue
-import signal
-import threading
 import time
 from pathlib import Path
 
@@ -21,7 +19,7 @@ import zenoh
 
 from common import protocol
 from common.cli import add_common, load_config
-from common.bus import open_session
+from common.bus import open_session, stop_on_signals
 from common.recording import RecordWriter
 
 log = logging.getLogger("record")
@@ -59,9 +57,7 @@ def finished(payload: bytes) -> bool:
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     root = cfg.zenoh.root
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     inbox = Stamped()
     wanted = [zenoh.KeyExpr(f"{root}/{k}") for k in args.keyexpr]
     status_key = f"{root}/sim/status"

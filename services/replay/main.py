@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
 import threading
 import time
 from pathlib import Path
 
 import zenoh
 
-from common.bus import open_session, wait_alive
+from common.bus import open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.recording import RecordReader, RecordingError
 
@@ -31,9 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     path = Path(args.recording)
     with path.open("rb") as f:
         try:

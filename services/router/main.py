@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
-import threading
 
 import zenoh
 
-from common.bus import zenoh_config
+from common.bus import stop_on_signals, zenoh_config
 
 log = logging.getLogger("router")
 
@@ -22,9 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     with zenoh.open(zenoh_config(args.connect, args.listen, mode="router")):
         log.info("router listening on %s", ", ".join(args.listen))
         while not stop.wait(0.2):

@@ -17,7 +17,7 @@ import time
 from collections.abc import Iterable
 from typing import IO
 
-from common.bus import free_port, wait_port
+from common.bus import free_port, stop_on_signals, wait_port
 from common.cli import COMMANDS, add_common, load_config
 from common.deployment import (
     Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
@@ -129,9 +129,7 @@ def stop_all(children: Iterable[Supervised], log: Log) -> None:
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     log = Log(sys.stderr)
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     connect: list[str] = list(args.connect or [])
     router: Supervised | None = None
     if args.with_router:

@@ -11,8 +11,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import logging
-import signal
-import threading
 import time
 import tomllib
 from collections.abc import Iterator
@@ -21,7 +19,7 @@ from pathlib import Path
 import zenoh
 
 from common import protocol
-from common.bus import open_session, wait_alive
+from common.bus import open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.config import Config
 from common.sim_scenario import Scenario
@@ -87,9 +85,7 @@ def main(args: argparse.Namespace) -> int:
     if args.scans:
         period = min(s.scan_period for s in (scn.radar, scn.sonar) if s is not None)
         scn = dataclasses.replace(scn, duration=max(scn.duration, args.scans * period))
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     root = cfg.zenoh.root
     with open_session(cfg.zenoh) as session:
         token = session.liveliness().declare_token(f"{root}/alive/simulate/{path.stem}")

@@ -5,15 +5,13 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
-import threading
 import time
 from typing import Any
 
 import zenoh
 
 from common import protocol
-from common.bus import Inbox, open_session
+from common.bus import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 LISTEN_S = 2.5
@@ -73,9 +71,7 @@ def take(inbox: Inbox, metrics: dict[tuple[str, str], dict[str, Any]]) -> None:
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     root = cfg.zenoh.root
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     inbox = Inbox()
     metrics: dict[tuple[str, str], dict[str, Any]] = {}
     with open_session(cfg.zenoh) as session:

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 from typing import Any
 
 from common import protocol
-from common.bus import Inbox, open_session
+from common.bus import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,9 +35,7 @@ def summary(key: str, msg: dict[str, Any]) -> str:
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     root = cfg.zenoh.root
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop = stop_on_signals()
     inbox = Inbox()
     n = 0
     with open_session(cfg.zenoh) as session:
