@@ -29,8 +29,12 @@ Cycle at t (001 figure 7):
   module 64 + 65: localisation by blocks from the contributing updated elementary
     tracks and the EKF update with [49]-[50];
   module 61: score = sum of the contributing elementary scores; tracks without any
-    contributor stay in pure prediction and are deleted after `max_coast` cycles;
-    numbers are stable and recycled (common.track_table).
+    contributor stay in pure prediction (status coasting) and are deleted after
+    `max_coast` cycles; numbers are stable and recycled (common.track_table). A track
+    whose contributors were reported but gave no measurement this scan (all ambiguous
+    or missed, e.g. crossing.toml t = 52, 59) is predicted only but keeps its status:
+    001 puts a track in pure prediction only when it has no contributor (there the
+    contributors' estimates would still update it).
 Decorrelation (complement of 001, common.decorrelation): modules 64-65 do not take the
 elementary tracks' filtered estimates as measurements (their errors are correlated in
 time, which made the global covariance far too small), but the equivalent measurement
@@ -350,7 +354,8 @@ class GlobalFusion:
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
         tab.n_good[live] += n_act >= self.p.confirm_bases
         tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
-        tab.status[live] = np.where(~updated & ~np.isin(live, new), Status.COASTING,
+        reporting = (r >= 0).any(axis=1)  # a contributing elementary track was reported
+        tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
                                     np.where(tab.confirmed[live], Status.CONFIRMED,
                                              Status.TENTATIVE))
 
