@@ -42,10 +42,10 @@ of the scan recovered from two successive reports of each elementary track, i.e.
 fused plot that track used. A contributing elementary track without a measurement this
 scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
 Module 63 ([48]) and module 62 keep using the estimates (common.global_assoc says why).
-Module 64 during tracking is linearised at the prediction
-(common.localisation.linearised_position, stated deviation: the per-scan block mean is
-biased for poorly observed altitudes); when its residuals fail the chi-square test
-(gate_prob) the track gets no position update this scan.
+Module 64 during tracking is an iterated posterior linearisation started at the
+prediction (common.localisation.linearised_position, stated deviation: the per-scan
+block mean is biased for poorly observed altitudes); when its residuals fail the
+chi-square test (gate_prob) the track gets no position update this scan.
 Process noise (complement of 001 [51], which uses one fixed Q): every track adapts its
 horizontal noise power q by continuous noise level adjustment (Bar-Shalom, Li and
 Kirubarajan, "Estimation with applications to tracking and navigation", 11.2): a fading

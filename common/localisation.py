@@ -205,15 +205,39 @@ def block_localise(
     return mean, cov, np.bincount(owner, minlength=n)
 
 
-def _jacobian(x: np.ndarray, c: Constraints, w: np.ndarray) -> np.ndarray:
-    """Weighted Jacobian (N, 2K, 3) of the ranges [36] and azimuths at positions x."""
-    d_t = x[:, None, :] - c.tx
-    d_r = x[:, None, :] - c.rx
-    rho2 = d_r[..., 0] ** 2 + d_r[..., 1] ** 2
-    j_rb = (d_t / np.linalg.norm(d_t, axis=-1, keepdims=True)
-            + d_r / np.linalg.norm(d_r, axis=-1, keepdims=True)) * (w / c.srb)[..., None]
-    j_az = np.stack([d_r[..., 1] / rho2, -d_r[..., 0] / rho2, np.zeros_like(rho2)], -1)
-    return np.concatenate([j_rb, j_az * (w / c.saz)[..., None]], axis=1)
+def _predict_meas(pts: np.ndarray, c: Constraints, ref_az: np.ndarray) -> np.ndarray:
+    """Ranges [36] and azimuths (unwrapped around ref_az (N, K)) of the K constraint
+    slots at points pts (N, M, 3) -> (N, M, 2K)."""
+    tx = c.tx[None, None] if c.tx.ndim == 2 else c.tx[:, None]
+    rx = c.rx[None, None] if c.rx.ndim == 2 else c.rx[:, None]
+    d_t = pts[:, :, None, :] - tx
+    d_r = pts[:, :, None, :] - rx
+    rb = np.linalg.norm(d_t, axis=-1) + np.linalg.norm(d_r, axis=-1)  # 001 [36]
+    az = ref_az[:, None, :] + wrap_pi(np.arctan2(d_r[..., 0], d_r[..., 1]) - ref_az[:, None, :])
+    return np.concatenate([rb, az], axis=-1)
+
+
+def _slr(
+    x: np.ndarray, S: np.ndarray, c: Constraints, z_min: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Statistical linear regression of the ranges and azimuths over N(x, S): mean
+    (N, 2K), slope A (N, 2K, 3) and linearisation error covariance Omega (N, 2K, 2K),
+    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0), z kept >= z_min."""
+    lam, V = np.linalg.eigh(S)
+    L = V * np.sqrt(3.0 * np.maximum(lam, 0.0))[:, None, :]
+    dev = np.concatenate([np.swapaxes(L, 1, 2), -np.swapaxes(L, 1, 2)], axis=1)  # (N, 6, 3)
+    pts = x[:, None, :] + dev
+    pts[..., 2] = np.maximum(pts[..., 2], z_min)
+    _, ref_az, _ = residuals(x, c)
+    ref_az = c.az - ref_az  # azimuths at x
+    Y = _predict_meas(pts, c, ref_az)
+    y_mean = Y.mean(axis=1)
+    dY = Y - y_mean[:, None, :]
+    dX = pts - pts.mean(axis=1, keepdims=True)
+    Psi = np.swapaxes(dX, 1, 2) @ dY / 6.0  # (N, 3, 2K)
+    A = np.swapaxes(np.linalg.solve(S, Psi), 1, 2)
+    Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ S @ np.swapaxes(A, 1, 2)
+    return y_mean, A, 0.5 * (Omega + np.swapaxes(Omega, 1, 2))
 
 
 def linearised_position(
@@ -221,50 +245,65 @@ def linearised_position(
     iterations: int = 4, floor_sigma: float = 1e5,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Module 64 during tracking: the position measurement of this scan's ranges and
-    azimuths, linearised at the posterior given the predicted position.
+    azimuths, linearised over the posterior given the predicted position.
 
-    Gauss-Newton on data + prediction (x_pred (N, 3), P_pred (N, 3, 3) as a Gaussian
-    prior) finds the posterior position x^; the prediction is then removed again, so
-    that the result carries the scan's information only (the EKF adds the prediction):
-        R = (J' W J + I / floor_sigma^2)^-1,  z = x^ + R J' W r(x^)
-    (J, W, r: Jacobian, weights, residuals of the valid constraints at x^). Returns
-    (z (N, 3), R (N, 3, 3), chi2 (N,), x^ (N, 3)), chi2 the sum of the squared
-    normalised residuals at x^ (consistency of the ranges with each other and with the
-    prediction; chi-square with 2 x (valid constraints) degrees of freedom).
+    Iterated posterior linearisation (Garcia-Fernandez, Svensson, Morelande and
+    Sarkka, "Posterior linearization filter", IEEE TSP 2015): starting from the
+    prediction N(x_pred, P_pred) (N, 3), (N, 3, 3), the ranges [36] and azimuths are
+    replaced by their statistical linear regression over the current posterior N(x, S)
+    (`_slr`: h(X) ~ y + A (X - x) + e, cov e = Omega), and the linear-Gaussian update
+    with R_eff = diag(sigma^2) + Omega gives the next posterior; `iterations` times.
+    At the last linearisation the scan's own information and measurement are
+        I = A' R_eff^-1 A,  R = (I + I_3 / floor_sigma^2)^-1,  z = x + R A' R_eff^-1 d,
+    d = measurements - y (azimuths wrapped), so that the EKF of module 65, which adds the
+    prediction, receives this scan's information only (no inflation; the floor only
+    keeps R finite along an axis the scan does not observe). Returns (z (N, 3),
+    R (N, 3, 3), chi2 (N,), posterior position (N, 3)); chi2 = normalised squared
+    residuals of the linear model (R_eff) plus the prediction term at the posterior,
+    chi-square with 2 x (valid constraints) degrees of freedom.
 
-    Deviation from 001 (stated): 001 localises each scan by blocks [36]-[41] alone.
+    Deviations from 001 (stated): 001 localises each scan by blocks [36]-[41] alone.
     For a low target, z is nearly unobservable in one scan (crossing.toml, 1.5 km at
-    40 km: Gauss-Newton sigma_z ~ 13 km) and the block zone is cut at z >= z_min and
-    curved, so its mean [41] is biased (measured +0.8 to +2 km); the EKF averages that
-    bias scan after scan into a confident, wrong altitude. Linearising at the
-    prediction gives each scan's information without that bias (as an iterated EKF
-    would). Blocks remain in module 62, where there is no prediction.
-
-    Conservative information (stated): R is taken from the Jacobian at x^ lowered by
-    one posterior sigma in z (not below z_min). d r_b / d z grows with the height above
-    the sensors' plane, so at an altitude estimated too high the Jacobian at x^ claims
-    more z information than the target gives (measured: z 1.5 km off with sigma 0.3
-    km on crossing.toml); the lower point bounds that optimism.
+    40 km: sigma_z ~ 3 km) and the block zone is cut at z >= z_min and curved, so its
+    mean [41] is biased (measured +0.8 to +2 km); the EKF averaged that bias into a
+    confident, wrong altitude. A Jacobian at a point estimate (EKF/IEKF) claims the
+    slope d r_b / d z of that point, which grows with the height above the sensors'
+    plane: with an altitude estimated too high it overstates the z information
+    (measured: z 1.4 km off with sigma 0.33 km on crossing.toml). The regression over
+    the posterior uses the slope the data have over the altitudes still credible and
+    adds Omega for the curvature it cannot follow, so the information is honest while
+    the altitude is uncertain and tends to the Jacobian's once it is known.
     """
     J0 = np.linalg.inv(P_pred)
-    x = np.array(x_pred, dtype=float)
+    x, S = np.array(x_pred, dtype=float), np.array(P_pred, dtype=float)
     w = c.valid.astype(float)
+    K = c.rb.shape[1]
+    meas = np.concatenate([c.rb, c.az], axis=1)
+    sig2 = np.concatenate([c.srb, c.saz], axis=1) ** 2
+    mask = np.concatenate([w, w], axis=1)
+    eye = np.eye(2 * K)
     for it in range(iterations + 1):
-        J = _jacobian(x, c, w)
-        res_rb, res_az, _ = residuals(x, c)  # 001 [36]
-        r = np.concatenate([res_rb * w / c.srb, res_az * w / c.saz], axis=1)
-        info = np.swapaxes(J, 1, 2) @ J
-        g = (np.swapaxes(J, 1, 2) @ r[..., None])[..., 0]
+        y, A, Omega = _slr(x, S, c, z_min)
+        d = meas - y
+        d[:, K:] = wrap_pi(d[:, K:])
+        d *= mask
+        A = A * mask[..., None]
+        R_eff = (Omega + sig2[:, :, None] * eye) * mask[:, :, None] * mask[:, None, :]
+        R_eff += (1.0 - mask)[:, :, None] * eye
+        AtW = np.swapaxes(np.linalg.solve(R_eff, A), 1, 2)  # A' R_eff^-1 (N, 3, 2K)
+        info = AtW @ A
+        g = (AtW @ d[..., None])[..., 0]
         if it == iterations:
             break
-        dx = np.linalg.solve(info + J0, (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])
-        x = x + dx[..., 0]
+        S = np.linalg.inv(info + J0)
+        x = x + (S @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
         x[:, 2] = np.maximum(x[:, 2], z_min)
-    low = x.copy()
-    low[:, 2] = np.maximum(x[:, 2] - np.sqrt(np.linalg.inv(info + J0)[:, 2, 2]), z_min)
-    J_low = _jacobian(low, c, w)
-    R = np.linalg.inv(np.swapaxes(J_low, 1, 2) @ J_low + np.eye(3) / floor_sigma**2)
+        S = 0.5 * (S + np.swapaxes(S, 1, 2))
+    R = np.linalg.inv(info + np.eye(3) / floor_sigma**2)
     z = x + (R @ g[..., None])[..., 0]
-    e = x - x_pred
-    chi2 = np.sum(r**2, axis=1) + np.einsum("ni,ni->n", e, (J0 @ e[..., None])[..., 0])
-    return z, 0.5 * (R + np.swapaxes(R, 1, 2)), chi2, x
+    post = x + (np.linalg.inv(info + J0) @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
+    res = d - (A @ (post - x)[..., None])[..., 0]
+    e = post - x_pred
+    chi2 = (np.einsum("ni,ni->n", res, np.linalg.solve(R_eff, res[..., None])[..., 0])
+            + np.einsum("ni,ni->n", e, (J0 @ e[..., None])[..., 0]))
+    return z, 0.5 * (R + np.swapaxes(R, 1, 2)), chi2, post
