@@ -32,7 +32,7 @@ class Deployment:
         self.inbox = Inbox()
         self.messages: list[tuple[str, dict[str, Any]]] = []
         self._subs: list[Any] = []
-        self._token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
+        self._token: Any = None
 
     def __enter__(self) -> "Deployment":
         return self
@@ -43,7 +43,8 @@ class Deployment:
             c.stop()
         for s in self._subs:
             s.undeclare()
-        self._token.undeclare()
+        if self._token is not None:
+            self._token.undeclare()
         self.session.close()
         self.router.stop()
         if exc is not None:
@@ -60,6 +61,14 @@ class Deployment:
     def collect(self, keyexpr: str) -> None:
         """Subscribe the collector to root/keyexpr (before the data starts)."""
         self._subs.append(self.session.declare_subscriber(f"{ROOT}/{keyexpr}", self.inbox.on_sample))
+        self.announce()
+
+    def announce(self) -> None:
+        """(Re)declare the collector's liveliness token after its latest subscription, so
+        a simulator that waits for ``test/collector`` never publishes before it listens."""
+        if self._token is not None:
+            self._token.undeclare()
+        self._token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
 
     def wait_alive(self, names: list[str], timeout: float = 60.0) -> None:
         """Block until every root/alive/<name> token exists (a service is subscribed)."""

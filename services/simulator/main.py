@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import logging
 import time
 import tomllib
@@ -71,6 +72,14 @@ def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat:
                 yield t_run, messages
 
 
+def publisher(session: zenoh.Session, key: str) -> zenoh.Publisher:
+    """A reliable BLOCK publisher (never drops). The first scan's publishers are declared
+    before waiting for the subscribers, so the routing of every key is settled before the
+    first sample."""
+    return session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK,
+                                     reliability=zenoh.Reliability.RELIABLE)
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     path = Path(args.scenario)
@@ -89,12 +98,14 @@ def main(args: argparse.Namespace) -> int:
     root = cfg.zenoh.root
     with open_session(cfg.zenoh) as session:
         token = session.liveliness().declare_token(f"{root}/alive/simulate/{path.stem}")
+        scans_iter = repeated(scn, cfg, args.seed, args.scans, args.repeat, args.gap)
+        first = next(scans_iter, None)
+        pubs = {suffix: publisher(session, f"{root}/{suffix}") for suffix, _ in (first or (0, []))[1]}
         wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
-        pubs: dict[str, zenoh.Publisher] = {}
         published = scans = 0
         t_first = t = 0.0
         wall0 = time.monotonic()
-        for t, messages in repeated(scn, cfg, args.seed, args.scans, args.repeat, args.gap):
+        for t, messages in itertools.chain([first] if first else [], scans_iter):
             if stop.is_set():
                 break
             if scans == 0:
@@ -104,12 +115,9 @@ def main(args: argparse.Namespace) -> int:
                 if delay > 0 and stop.wait(delay):
                     break
             for suffix, msg in messages:
-                pub = pubs.get(suffix)
-                if pub is None:
-                    pub = pubs[suffix] = session.declare_publisher(
-                        f"{root}/{suffix}", congestion_control=zenoh.CongestionControl.BLOCK,
-                        reliability=zenoh.Reliability.RELIABLE)
-                pub.put(protocol.encode(msg))
+                if suffix not in pubs:
+                    pubs[suffix] = publisher(session, f"{root}/{suffix}")
+                pubs[suffix].put(protocol.encode(msg))
                 published += 1
             scans += 1
         status = {"v": protocol.VERSION, "t": float(t), "state": "done",
