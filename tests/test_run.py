@@ -12,7 +12,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import pytest
 
 from common import protocol
 from common.bus import Inbox, free_port, open_session, wait_port
@@ -200,7 +199,6 @@ def test_run_with_router_and_simulator_delivers_every_service_output() -> None:
     assert "[run] simulator done" in run.lines and run.lines[-1] == "[run] stopped"
 
 
-@pytest.mark.skipif("elementary-tracker" not in COMMANDS, reason="no elementary tracker yet")
 def test_run_restarts_a_killed_service_and_its_output_resumes() -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     run = Run("--config", TWO_TARGETS, "--connect", endpoint, "--with-router",

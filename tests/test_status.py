@@ -7,9 +7,7 @@ import subprocess
 import time
 from pathlib import Path
 
-import pytest
 
-from common.cli import COMMANDS
 from common.procs import pfusion_argv
 from services.status.main import table
 from tests.harness import ROOT, SCENARIOS, Deployment
@@ -38,7 +36,6 @@ def test_table_layout() -> None:
     assert second == {len("service") + 2}
 
 
-@pytest.mark.skipif("channel-plotter" not in COMMANDS, reason="no channel plotter yet")
 def test_status_lists_live_services_with_their_counters(tmp_path: Path) -> None:
     with Deployment(tmp_path) as d:
         d.start("plotter", "channel-plotter", "--config", str(TWO_TARGETS), "--base", "b1")
@@ -66,6 +63,7 @@ def test_status_lists_live_services_with_their_counters(tmp_path: Path) -> None:
 
 def test_status_watch_refreshes_until_interrupted(tmp_path: Path) -> None:
     with Deployment(tmp_path) as d:
+        d.announce()
         proc = subprocess.Popen(pfusion_argv("status", "--connect", d.endpoint, "--watch"),
                                 stdout=subprocess.PIPE, text=True)
         assert proc.stdout is not None
