@@ -62,6 +62,21 @@ def neighbours(z: np.ndarray, sigma: np.ndarray, k: float) -> np.ndarray:
     return mask
 
 
+def drop_acceleration(x: np.ndarray, P: np.ndarray, memory: np.ndarray) -> None:
+    """Memory-mode tracks (004 alpha = 0) in place: gamma_b := 0, P_gamma += gamma_b^2.
+
+    004 memory mode extrapolates the last estimate with the linear model of its eq. 1
+    (C + A dt: r_b + v_b dt, theta + omega dt); the order-3 model of eq. 14 (a D t^2
+    term) is an option of the seed, not used here. The gamma_b estimate of the 5-state
+    filter (white jerk, 001 [20]) is mostly noise: extrapolated as 1/2 gamma_b T^2 over
+    a 20 s ambiguity it moved tracks by up to 1.3 km (crossing.toml). The discarded
+    estimate is kept as uncertainty (P_gamma += gamma_b^2), which 001 [26] propagates
+    to r_b and v_b, so the gate after the ambiguity still covers a real acceleration.
+    """
+    P[memory, 2, 2] += np.square(x[memory, 2])
+    x[memory, 2] = 0.0
+
+
 @dataclass(frozen=True)
 class ElementaryParams:
     """Parameters of table [radar.tracker] (units: m, s, rad).
@@ -187,6 +202,7 @@ class ElementaryTracker:
         x[rows], P[rows], _, _ = kalman.update(x[rows], P[rows], innov, H, R,
                                                gain_scale=alpha[rows])  # 001 [28]-[31]
         x[:, 3] = wrap_2pi(x[:, 3])
+        drop_acceleration(x, P, alpha == 0.0)
         tab.x[idx], tab.P[idx] = x, P
         tab.t_last[idx] = t
         tab.ambiguous[idx] = amb

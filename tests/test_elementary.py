@@ -8,7 +8,7 @@ import pytest
 from scipy.stats import chi2
 
 from common.elementary import (
-    H, ElementaryParams, ElementaryTracker, RadarCrossingParams, gate_pairs,
+    H, ElementaryParams, ElementaryTracker, RadarCrossingParams, drop_acceleration, gate_pairs,
 )
 from common.elementary_init import compatible, initial_state, propagate
 from common.plot_fusion import LateInput, Plots
@@ -198,7 +198,25 @@ def test_crossing_flag_and_memory_mode() -> None:
     rep = trk.step(k, plots([(10480.0, 40.0, 1.0), (10520.0, -40.0, 1.0)], 3))
     assert rep.ambiguous.all()
     F = seed_F(k - 7.0)
-    np.testing.assert_allclose(rep.x, prev @ F.T)  # memory mode: prediction only
+    want = prev @ F.T  # memory mode: prediction only, then gamma_b dropped
+    want[:, 2] = 0.0
+    np.testing.assert_allclose(rep.x, want)
+    # the next memory scan extrapolates the linear model: r_b + v_b T, theta + omega T
+    nxt = trk.step(k + 2.0, plots([(10560.0, 40.0, 1.0), (10440.0, -40.0, 1.0)], 3))
+    assert nxt.ambiguous.all()
+    np.testing.assert_allclose(nxt.x[:, 0], rep.x[:, 0] + 2.0 * rep.x[:, 1])
+    np.testing.assert_allclose(nxt.x[:, [1, 2, 4]], rep.x[:, [1, 2, 4]])
+
+
+def test_drop_acceleration_keeps_the_estimate_as_variance() -> None:
+    x = np.array([[1e4, 40.0, 3.0, 1.0, 0.01], [2e4, -40.0, -2.0, 1.0, 0.0]])
+    P = np.stack([np.eye(5) * 4.0, np.eye(5) * 4.0])
+    P0 = P.copy()
+    drop_acceleration(x, P, np.array([True, False]))
+    assert x[:, 2].tolist() == [0.0, -2.0]
+    assert P[0, 2, 2] == 4.0 + 9.0
+    P0[0, 2, 2] = 13.0
+    np.testing.assert_array_equal(P, P0)
 
 
 def test_crossing_candidates_match_brute_force() -> None:
