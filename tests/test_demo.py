@@ -23,7 +23,8 @@ def test_demo_runs_everything_and_draws(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stdout + r.stderr[-3000:]
     out = r.stdout
     assert ", lost 0," in out and "out of order 0" in out
-    assert "radar (global tracks vs truth" in out and "mean GOSPA" in out
+    assert "radar (confirmed global tracks vs truth" in out and "mean GOSPA" in out
+    assert "PCRLB m" in out and "95% interval of the mean NEES" in out
     assert "confirmed bearing tracks" in out
     expected = (int(SIZE_IN[0] * DPI), int(SIZE_IN[1] * DPI))
     for name in ("radar.png", "sonar.png"):

@@ -1,5 +1,6 @@
 """The demo's metrics tables: global radar tracks against truth (GOSPA, number
-switches, position RMSE) and TMA solutions against truth (range, course, speed)."""
+switches, position RMSE against the PCRLB, NEES) and TMA solutions against truth (range,
+course, speed)."""
 
 from __future__ import annotations
 
@@ -10,11 +11,13 @@ import numpy as np
 
 from common.angles import wrap_pi
 from common.config import Config
-from common.metrics import MetricsAccumulator
+from common.pcrlb import Evaluation
+from services.evaluate.main import report, truth_state
 
 Msg = dict[str, Any]
 GOSPA_C_M = 2000.0
 KNOT = 0.514444
+SETTLE_S = 20.0
 
 
 @dataclass
@@ -29,41 +32,24 @@ class Collected:
         return self.by_kind.get(kind, [])
 
 
-def confirmed_positions(msg: Msg) -> tuple[np.ndarray, np.ndarray]:
-    """Ids and (x, y, z) of the confirmed global tracks of one gtracks message."""
-    trs = [tr for tr in msg["tracks"] if tr["status"] == "confirmed"]
-    ids = np.array([tr["id"] for tr in trs], dtype=int)
-    pos = np.array([[tr["x"][0], tr["x"][2], tr["x"][4]] for tr in trs]).reshape(-1, 3)
-    return ids, pos
-
-
-def radar_metrics(data: Collected) -> MetricsAccumulator | None:
-    """GOSPA (c = 2 km, p = 2, switching penalty c) of confirmed global tracks."""
-    truth = {round(m["t"], 6): m for m in data.of("truth_radar")}
-    acc = MetricsAccumulator(GOSPA_C_M, 2.0, GOSPA_C_M)
-    for m in data.of("gtracks"):
-        tm = truth.get(round(m["t"], 6))
-        if tm is None:
-            continue
-        ids, pos = confirmed_positions(m)
-        tpos = np.column_stack([tm["x"], tm["y"], tm["z"]])
-        acc.add(m["t"], np.asarray(tm["id"]), tpos, ids, pos)
-    return acc if data.of("gtracks") else None
-
-
 def radar_table(data: Collected) -> str:
-    acc = radar_metrics(data)
-    if acc is None:
+    """The table of ``pfusion evaluate`` (GOSPA, switches, breaks, RMSE vs PCRLB, NEES)
+    for the confirmed global tracks against truth."""
+    if not data.of("gtracks"):
         return "radar: no global tracks (global fusion not running)"
-    s = acc.summary()
-    lines = [
-        "radar (global tracks vs truth, GOSPA c=2 km p=2)",
-        f"  scans scored {s.steps}, mean GOSPA {s.mean_gospa:.0f} m, mean OSPA {s.mean_ospa:.0f} m",
-        f"  number switches {s.switches}, track breaks {s.breaks}",
-    ]
-    for tid, r in sorted(s.rmse.items()):
-        lines.append(f"  target {tid}: position RMSE {r:.0f} m")
-    return "\n".join(lines)
+    ev = Evaluation(c=GOSPA_C_M, gamma=GOSPA_C_M)
+    truth = {round(m["t"], 6): m for m in data.of("truth_radar")}
+    for g in data.of("gtracks"):
+        m = truth.get(round(g["t"], 6))
+        if m is None:
+            continue
+        conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
+        ev.add(g["t"], m["id"], truth_state(m),
+               np.array([k["id"] for k in conf], dtype=np.int64),
+               np.array([k["x"] for k in conf], dtype=float).reshape(-1, 6),
+               np.array([k["P"] for k in conf], dtype=float).reshape(-1, 6, 6))
+    return "radar (confirmed global tracks vs truth, GOSPA c=2 km p=2)\n" + report(
+        ev, data.radar_cfg, SETTLE_S)
 
 
 def tma_errors(data: Collected) -> list[tuple[int, int, float, float, float, float]]:

@@ -53,7 +53,8 @@ def base_information(cfg: Config) -> np.ndarray | None:
     return np.array(out)
 
 
-def _state(m: dict[str, Any]) -> np.ndarray:
+def truth_state(m: dict[str, Any]) -> np.ndarray:
+    """Truth states (n, 6) [x vx y vy z vz] of a sim/truth/radar message."""
     return np.column_stack([m["x"], m["vx"], m["y"], m["vy"], m["z"], m["vz"]])
 
 
@@ -102,7 +103,7 @@ def main(args: argparse.Namespace) -> int:
         ids = np.array([k["id"] for k in conf], dtype=np.int64)
         if ev.metrics.times and t <= ev.metrics.times[-1]:
             return
-        ev.add(t, m["id"], _state(m), ids, tx, tP)
+        ev.add(t, m["id"], truth_state(m), ids, tx, tP)
         svc.last_t = t
         k = len(ev.metrics.times)
         if k % args.every == 0:
