@@ -222,7 +222,8 @@ def _slr(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Statistical linear regression of the ranges and azimuths over N(x, S): mean
     (N, 2K), slope A (N, 2K, 3) and linearisation error covariance Omega (N, 2K, 2K),
-    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0), z kept >= z_min."""
+    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0), z kept >= z_min (when
+    that moves points, Omega may lose positivity: negative eigenvalues are set to 0)."""
     lam, V = np.linalg.eigh(S)
     L = V * np.sqrt(3.0 * np.maximum(lam, 0.0))[:, None, :]
     dev = np.concatenate([np.swapaxes(L, 1, 2), -np.swapaxes(L, 1, 2)], axis=1)  # (N, 6, 3)
@@ -237,7 +238,8 @@ def _slr(
     Psi = np.swapaxes(dX, 1, 2) @ dY / 6.0  # (N, 3, 2K)
     A = np.swapaxes(np.linalg.solve(S, Psi), 1, 2)
     Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ S @ np.swapaxes(A, 1, 2)
-    return y_mean, A, 0.5 * (Omega + np.swapaxes(Omega, 1, 2))
+    lam_o, V_o = np.linalg.eigh(0.5 * (Omega + np.swapaxes(Omega, 1, 2)))
+    return y_mean, A, (V_o * np.maximum(lam_o, 0.0)[:, None, :]) @ np.swapaxes(V_o, 1, 2)
 
 
 def linearised_position(
