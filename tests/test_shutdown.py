@@ -1,0 +1,44 @@
+"""SIGINT / SIGTERM: every service and the router exit cleanly (code 0) within 2 s, and a
+service's liveliness token disappears with it."""
+
+from __future__ import annotations
+
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from harness import ROOT, SCENARIOS, Deployment
+
+RADAR = str(SCENARIOS / "two_targets.toml")
+SONAR = str(SCENARIOS / "sonar_tma.toml")
+SERVICES = [
+    ("channel_plotter/b1", ("channel-plotter", "--config", RADAR, "--base", "b1")),
+    ("elementary_tracker/b1", ("elementary-tracker", "--config", RADAR, "--base", "b1")),
+    ("global_fusion/*", ("global-fusion", "--config", RADAR)),
+    ("bearing_tracker/a1", ("bearing-tracker", "--config", SONAR, "--array", "a1")),
+    ("tma/a1", ("tma", "--config", SONAR, "--array", "a1")),
+]
+
+
+def alive(d: Deployment, name: str) -> bool:
+    return any(r.ok for r in d.session.liveliness().get(f"{ROOT}/alive/{name}", timeout=1.0))
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_services_exit_cleanly_within_2_s(tmp_path: Path, sig: signal.Signals) -> None:
+    with Deployment(tmp_path) as d:
+        children = [(name, d.start(args[0], *args)) for name, args in SERVICES]
+        d.wait_alive([name for name, _ in SERVICES])
+        for name, child in children:
+            t0 = time.monotonic()
+            child.proc.send_signal(sig)
+            code = child.proc.wait(5)
+            took = time.monotonic() - t0
+            assert code == 0, f"{name} exited with {code}"
+            assert took < 2.0, f"{name} took {took:.2f} s to exit"
+            assert not alive(d, name), f"{name} still has a liveliness token"
+        t0 = time.monotonic()
+        d.router.proc.send_signal(sig)
+        assert d.router.proc.wait(5) == 0 and time.monotonic() - t0 < 2.0
