@@ -8,7 +8,9 @@ time only:
      keeps the full computation to the plausible pairs and loses none (the marginal
      d^2 never exceeds the full one, and |S| >= |R| bounds G from above);
   3. global nearest neighbour on the gated d^2 (000: GNN cost matrix);
-  4. seed 004 crossing management on the confirmed tracks: alpha as gain weight;
+  4. seed 004 crossing management on the confirmed tracks: alpha as gain weight; a
+     track leaving the ambiguity keeps its detection only if no other confirmed track's
+     prediction is nearer to it (deviation, see `_exit_pairs`);
   5. Kalman update with the Joseph-form covariance (000 P(k/k));
   6. track quality L(k) = L(k-1) + dL (000 claim 4), ln(1 - P_D) for a miss;
      tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2); confirmed
@@ -43,7 +45,7 @@ from common.bearing_model import (
     quality_increment,
     thresholds,
 )
-from common.crossing import CrossingManager, CrossingParams
+from common.crossing import CrossingManager, CrossingParams, wrapped_diff
 from common.kalman import predict, update
 from common.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.multiline import NEW, MultiLineGrouper, group_means
@@ -303,8 +305,10 @@ class BearingTracker:
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
-        R = _diag(Rd[cols_])
         alpha, ambiguous = self._crossing(t, idx, x, P, z, rows, cols_, heading, n_det)
+        keep = self._exit_pairs(idx, x, z, Rd, rows, cols_, ambiguous)
+        rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
+        R = _diag(Rd[cols_])
 
         if rows.size:  # 000 x^(k/k), K(k), Joseph-form P^(k/k)
             xu, Pu, _, _ = update(x[rows], P[rows], y, H, R, joseph=True, gain_scale=alpha[rows])
@@ -404,6 +408,40 @@ class BearingTracker:
         )
         alpha[conf], amb[conf] = a, f
         return alpha, amb
+
+    def _exit_pairs(
+        self, idx: np.ndarray, x: np.ndarray, z: np.ndarray, Rd: np.ndarray,
+        rows: np.ndarray, cols: np.ndarray, ambiguous: np.ndarray,
+    ) -> np.ndarray:
+        """Mask (K,) of the GNN pairs kept for the update. A confirmed track that leaves
+        the ambiguity at this scan (flagged at the previous cycle, not now: the end of
+        the memory mode of 004 claim 5, or claim 6) keeps its detection only if no
+        other confirmed track's prediction is nearer to it, in the measurement noise
+        metric of 004 g on the crossing components; otherwise the scan is a miss for it
+        (no update, dL = ln(1 - P_D)); the detection still opens no track, it lies in a
+        confirmed gate.
+        Deviation (not in 004, which leaves the re-acquisition to the tracker): the
+        track's P has grown by Q over the whole memory mode, so its gate is wide and
+        its first gain near one; with a missed detection of its own target (P_D < 1)
+        GNN hands it the other target's detection (or a clutter detection nearer the
+        other track), which moves it onto the other target in one update. Seen on
+        sonar_cross_1dpm_uneq (both tracks on the weak target, the strong one lost)."""
+        keep = np.ones(rows.size, dtype=bool)
+        if self.crossing is None or rows.size == 0:
+            return keep
+        tab = self.table
+        conf = tab.status[idx] == Status.CONFIRMED
+        leaving = conf[rows] & tab.ambiguous[idx[rows]] & ~ambiguous[rows]
+        if not leaving.any():
+            return keep
+        dims = self._cross_dims
+        zp = (x[conf] @ self.H.T)[:, dims]
+        pos = np.flatnonzero(conf)
+        k = np.flatnonzero(leaving)
+        diff = wrapped_diff(z[cols[k]][:, None, dims], zp[None, :, :], [0])
+        dist = np.sum(diff**2 / Rd[cols[k]][:, None, dims], axis=2)  # (k, confirmed)
+        keep[k] = pos[np.argmin(dist, axis=1)] == rows[k]
+        return keep
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""

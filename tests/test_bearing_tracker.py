@@ -19,6 +19,7 @@ from common.bearing_model import (
     thresholds,
 )
 from common.bearing_tracker import BearingTracker, TimeOrderError, TrackerParams
+from common.crossing import CrossingParams
 from common.multiline import NEW, MultiLineGrouper
 
 DEG = math.pi / 180.0
@@ -223,3 +224,40 @@ def test_narrowband_two_lines_one_multiline_track() -> None:
     groups = sorted(sorted(m.lines.tolist()) for m in c.multiline)
     assert groups == [[1, 2], [3]]
     assert c.ml[0] == c.ml[1] != c.ml[2]
+
+
+def _converge_until_ambiguous(tr: BearingTracker, rate: float, dt: float = 10.0) -> float:
+    """Two noiseless targets converging on bearing 1.0 (+-rate) until both tracks are
+    flagged ambiguous (004); returns the time of that scan."""
+    k = 0
+    while True:
+        t = k * dt
+        b = np.array([1.0 - 0.05 + rate * t, 1.0 + 0.05 - rate * t])
+        c = tr.step(t, b, np.array([100.0, 100.0]), 0.0)
+        if c.ambiguous.all():
+            return t
+        k += 1
+
+
+def test_track_leaving_memory_mode_drops_a_detection_nearer_another_track() -> None:
+    cp = CrossingParams(method="supnorm", S=8.0, max_duration=20.0)
+    tr = BearingTracker(BB, "cylindrical", 0.005, cp)
+    rate = 5e-5
+    t = _converge_until_ambiguous(tr, rate)
+    for _ in range(2):  # memory mode up to max_duration
+        t += 10.0
+        c = tr.step(t, np.array([1.0 - 0.05 + rate * t, 1.0 + 0.05 - rate * t]),
+                    np.array([100.0, 100.0]), 0.0)
+        assert c.ambiguous.all()
+    low, high = np.argsort(c.x[:, 0])
+    pred = c.x[:, 0] + c.x[:, 1] * 10.0
+    gap = pred[high] - pred[low]
+    t += 10.0
+    # exit scan (claim 6): the upper target is missed; its own detection is absent and
+    # two detections (target and clutter) lie beyond the lower track's prediction
+    det = np.array([pred[low] - 0.1 * gap, pred[low] - 0.3 * gap])
+    c = tr.step(t, det, np.array([100.0, 100.0]), 0.0)
+    assert not c.ambiguous.any()
+    assert c.x[high, 0] == pytest.approx(pred[high], abs=1e-12)  # miss, not a jump
+    assert c.x[low, 0] < pred[low]
+    assert c.ids.size == 2  # the unused detection opens no track
