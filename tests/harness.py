@@ -85,6 +85,8 @@ class Deployment:
     def simulate(self, scenario: Path, seed: int = 1, scans: int | None = None,
                  wait_alive: list[str] = (), timeout: float = 300.0) -> Child:
         """Run the simulator to completion (waiting for ``wait_alive`` services first)."""
+        if self._token is None:
+            self.announce()
         args = ["simulate", "--config", str(scenario), "--scenario", str(scenario),
                 "--seed", str(seed), "--wait-alive", "test/collector"]
         for name in wait_alive:
