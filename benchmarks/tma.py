@@ -10,11 +10,11 @@ to N bearings.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 
 import numpy as np
 
 from common.ctma import Bounds, TmaTracker, solve_ctma
+from core import median_ms  # benchmarks/core.py, beside this script
 from common.tma import solve_tma
 
 KN = 1852.0 / 3600.0
@@ -33,17 +33,6 @@ def scenario(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     yt = BETA[1] + BETA[3] * t
     brg = np.arctan2(xt - own[:, 0], yt - own[:, 1]) + SIG * np.random.default_rng(seed).standard_normal(n)
     return t, brg, own
-
-
-def median_ms(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time of fn() over ``repeat`` runs, in milliseconds."""
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
 
 
 def tracker_cycles_per_s(n_tracks: int, bounds: Bounds | None) -> float:
