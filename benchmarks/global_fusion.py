@@ -79,16 +79,10 @@ def chain_benchmark() -> None:
     from tests.harness import Deployment
 
     cfg = load(DENSE)
-    bases = [b.id for b in cfg.bases]
     with tempfile.TemporaryDirectory() as tmp, Deployment(Path(tmp)) as d:
         d.collect("radar/gtracks")
         d.collect("sim/truth/radar")
-        for b in bases:
-            d.start(f"plotter-{b}", "channel-plotter", "--config", str(DENSE), "--base", b)
-            d.start(f"tracker-{b}", "elementary-tracker", "--config", str(DENSE), "--base", b)
-        d.start("fusion", "global-fusion", "--config", str(DENSE))
-        alive = [f"{s}/{b}" for b in bases for s in ("channel_plotter", "elementary_tracker")]
-        alive.append("global_fusion/main")
+        alive = d.start_services(DENSE, ("channel-plotter", "elementary-tracker", "global-fusion"))
         d.wait_alive(alive)
         t0 = time.monotonic()
         d.simulate(DENSE, seed=1, wait_alive=alive)

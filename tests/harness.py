@@ -11,7 +11,9 @@ from typing import Any
 
 from common import protocol
 from common.bus import Inbox, open_session
-from common.config import ZenohConfig
+from common.cli import COMMANDS
+from common.config import ZenohConfig, load
+from common.deployment import plan
 from common.procs import Child, start_router
 from common.protocol import kind_of
 
@@ -57,6 +59,14 @@ class Deployment:
         child = Child(name, *args, "--connect", self.endpoint, log=self.logdir / f"{name}.log")
         self.children.append(child)
         return child
+
+    def start_services(self, config: Path, commands: tuple[str, ...]) -> list[str]:
+        """Start the services of ``config`` that run ``commands`` (common.deployment.plan);
+        returns their liveliness names, for ``wait_alive`` and ``simulate``."""
+        specs = [s for s in plan(load(config), str(config), COMMANDS) if s.argv[0] in commands]
+        for spec in specs:
+            self.start(spec.name.replace("/", "-"), *spec.argv)
+        return [spec.alive for spec in specs]
 
     def collect(self, keyexpr: str) -> None:
         """Subscribe the collector to root/keyexpr (before the data starts)."""

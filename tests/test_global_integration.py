@@ -28,12 +28,7 @@ def run_chain(tmp_path: Path, scn: Path) -> tuple[list[dict], list[dict]]:
         d.collect("radar/gtracks")
         d.collect("sim/truth/radar")
         d.collect("radar/etracks/*")
-        for b in bases:
-            d.start(f"plotter-{b}", "channel-plotter", "--config", str(scn), "--base", b)
-            d.start(f"tracker-{b}", "elementary-tracker", "--config", str(scn), "--base", b)
-        d.start("fusion", "global-fusion", "--config", str(scn))
-        alive = [f"{s}/{b}" for b in bases for s in ("channel_plotter", "elementary_tracker")]
-        alive.append("global_fusion/main")
+        alive = d.start_services(scn, ("channel-plotter", "elementary-tracker", "global-fusion"))
         d.wait_alive(alive)
         d.simulate(scn, seed=1, wait_alive=alive)
         truth = sorted(d.of("sim/truth/radar"), key=lambda m: m["t"])

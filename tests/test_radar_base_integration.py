@@ -39,10 +39,7 @@ def test_two_targets_every_base(tmp_path: Path) -> None:
         d.collect("radar/etracks/*")
         d.collect("radar/fused/*")
         d.collect("sim/truth/radar")
-        for b in bases:
-            d.start(f"plotter-{b}", "channel-plotter", "--config", str(SCN), "--base", b)
-            d.start(f"tracker-{b}", "elementary-tracker", "--config", str(SCN), "--base", b)
-        alive = [f"{s}/{b}" for b in bases for s in ("channel_plotter", "elementary_tracker")]
+        alive = d.start_services(SCN, ("channel-plotter", "elementary-tracker"))
         d.wait_alive(alive)
         d.simulate(SCN, seed=1, wait_alive=alive)
         truth = {m["t"]: m for m in d.of("sim/truth/radar")}
