@@ -12,7 +12,8 @@ import argparse
 from common import protocol
 from common.cli import add_common, load_config
 from common.config import section
-from common.plot_fusion import LateInput, PlotFusion, PlotterParams, Plots
+from common.plot_fusion import LateInput, PlotFusion, PlotterParams
+from common.radar_chain import fused_message, plots_of
 from common.service import Rejected, Service
 
 
@@ -34,18 +35,13 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_base", f"base '{msg['base']}' on a plotter of '{base.id}'")
         if msg["channel"] != key.rsplit("/", 1)[-1]:
             raise Rejected("channel_mismatch", f"channel '{msg['channel']}' published on {key}")
-        plots = Plots(msg["rb"], msg["vb"], msg["az"], msg["srb"], msg["svb"], msg["saz"])
         try:
-            scans = core.push(msg["channel"], msg["t"], plots)
+            scans = core.push(msg["channel"], msg["t"], plots_of(msg))
         except LateInput as e:
             raise Rejected(e.reason, e.detail) from None
         for t, fused in scans:
             svc.last_t = t
-            svc.publish(f"radar/fused/{base.id}", {
-                "v": protocol.VERSION, "t": t, "base": base.id,
-                "rb": fused.rb, "vb": fused.vb, "az": fused.az,
-                "srb": fused.srb, "svb": fused.svb, "saz": fused.saz, "n_ch": fused.n_ch,
-            })
+            svc.publish(f"radar/fused/{base.id}", fused_message(base.id, t, fused))
 
     svc.subscribe(f"radar/plots/{base.id}/*", on_plots)
     return svc.run()

@@ -22,9 +22,8 @@ import time
 from common import protocol
 from common.cli import add_common, load_config
 from common.config import ConfigError, section
-from common.crossing import CrossingParams
-from common.elementary import ElementaryParams
-from common.global_fusion import FusionParams, GlobalFusion
+from common.global_fusion import FusionParams
+from common.radar_chain import global_fusion
 from common.service import Rejected, Service
 
 
@@ -35,11 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     params = section(cfg, "radar.fusion", FusionParams)
-    crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
-                if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     try:
-        core = GlobalFusion(cfg.bases, params, crossing,
-                            section(cfg, "radar.tracker", ElementaryParams))
+        core = global_fusion(cfg)
     except ValueError as e:
         raise ConfigError("radar.base", str(e)) from None
     svc = Service("global_fusion", "main", cfg)
