@@ -22,11 +22,12 @@ import numpy as np
 
 from common import kalman
 from common.bistatic import POS, project, project_jacobian
+from common.imm import gaussian_loglik
 from common.motion import cv_F, cv_Q
 
 
-def predict(x: np.ndarray, P: np.ndarray, dt: np.ndarray, q: float, q_z: float):
-    """001 [55]-[56] with per-track time steps dt (N,)."""
+def predict(x: np.ndarray, P: np.ndarray, dt: np.ndarray, q: np.ndarray | float, q_z: float):
+    """001 [55]-[56] with per-track time steps dt (N,) and noise powers q (N,) or scalar."""
     return kalman.predict(x, P, cv_F(dt), cv_Q(dt, q, q_z))
 
 
@@ -52,8 +53,8 @@ def fused_update(
     vb_var: np.ndarray, active: np.ndarray, tx: np.ndarray, rx: np.ndarray,
     gain_scale: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """EKF update [58]-[62] with y of [49] and R of [50]; returns (x, P, NIS (N,)),
-    the normalised innovation squared of 3 + (active bases) degrees of freedom.
+    """EKF update [58]-[62] with y of [49] and R of [50]; returns (x, P, log-likelihood
+    (N,) of the measurement, common.imm.gaussian_loglik of [58]'s innovation).
 
     pos (N, 3), pos_cov (N, 3, 3) from module 64; vb, vb_var, active (N, B).
     """
@@ -65,19 +66,26 @@ def fused_update(
     R = np.zeros((n, 3 + B, 3 + B))
     R[:, :3, :3] = pos_cov
     R[:, np.arange(3, 3 + B), np.arange(3, 3 + B)] = np.where(active, vb_var, 1.0)  # [50]
-    x_new, P_new, S, _ = kalman.ekf_update(x, P, z, h, H, R, gain_scale=gain_scale)
-    y = z - h
-    nis = np.einsum("ni,ni->n", y, np.linalg.solve(S, y[..., None])[..., 0])
-    return x_new, P_new, nis
+    x_new, P_new, loglik = _update(x, P, z - h, H, R, gain_scale)
+    # a padded row (S = 1, innovation 0) adds log N(0; 0, 1): removed, so that loglik is
+    # that of the contributing rows only (3 + nb_cet dimensions)
+    return x_new, P_new, loglik + 0.5 * np.log(2.0 * np.pi) * (B - active.sum(axis=1))
 
 
 def single_base_update(
     x: np.ndarray, P: np.ndarray, y: np.ndarray, R: np.ndarray, tx: np.ndarray, rx: np.ndarray,
     gain_scale: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """EKF update with one base's [r_b, v_b, theta] (N, 3), R (N, 3, 3) through g [47]
-    (tx, rx (N, 3) per track); the azimuth innovation is wrapped."""
-    h = project(x, tx, rx)
-    G = project_jacobian(x, tx, rx)
-    x_new, P_new, _, _ = kalman.ekf_update(x, P, y, h, G, R, angle_idx=[2], gain_scale=gain_scale)
-    return x_new, P_new
+    (tx, rx (N, 3) per track); the azimuth innovation is wrapped. Returns (x, P,
+    log-likelihood (N,))."""
+    nu = kalman.innovation(y, project(x, tx, rx), angle_idx=[2])
+    return _update(x, P, nu, project_jacobian(x, tx, rx), R, gain_scale)
+
+
+def _update(x: np.ndarray, P: np.ndarray, nu: np.ndarray, H: np.ndarray, R: np.ndarray,
+            gain_scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """[58]-[62] on innovation nu, and the Gaussian log-likelihood of nu."""
+    x_new, P_new, S, _ = kalman.update(x, P, nu, H, R, gain_scale=gain_scale)
+    nis = np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[..., None])[..., 0])
+    return x_new, P_new, gaussian_loglik(nis, S)

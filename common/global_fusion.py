@@ -46,14 +46,19 @@ Module 64 during tracking is an iterated posterior linearisation started at the
 prediction (common.localisation.linearised_position, stated deviation: the per-scan
 block mean is biased for poorly observed altitudes); when its residuals fail the
 chi-square test (gate_prob) the track gets no position update this scan.
-Process noise (complement of 001 [51], which uses one fixed Q): every track adapts its
-horizontal noise power q by continuous noise level adjustment (Bar-Shalom, Li and
-Kirubarajan, "Estimation with applications to tracking and navigation", 11.2): a fading
-memory average nu of its normalised innovation squared NIS / dim of the module 65
-updates (nu <- rho nu + (1 - rho) NIS / dim, rho = q_memory), and after every such update
-q <- clip(q * nu^q_gain, q_min, q_max). A fixed q sized for the 2 deg/s turn of
-two_targets.toml made the straight target's covariance far too large (mean NEES 1.88),
-a smaller one lost the turning target. q_z stays fixed (no vertical manoeuvres modelled).
+Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
+model filter (common.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
+(q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
+the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood of
+the scan's measurement [49]; a new track starts from the chain's stationary
+probabilities. Association (63), crossing (004) and output use the combined
+estimate. With one fixed Q the filter could not be both consistent on a straight
+target and follow a 2 deg/s turn (two_targets.toml): a Q sized for the turn made the
+straight target's covariance far too large (mean NEES 1.88), and the adaptive q used
+before (continuous noise level adjustment) reacted after the gate [48] had already
+dissociated the bases at the turn's onset (a new track took over, NEES bursts of 100-
+450). When the crossing test of 004 scales the gain by alpha, the likelihood is
+tempered by the same alpha (alpha = 0, memory mode: probabilities only predicted).
 """
 
 from __future__ import annotations
@@ -64,7 +69,7 @@ from typing import Any
 
 import numpy as np
 
-from common import global_ekf
+from common import global_ekf, imm
 from common.bistatic import POS
 from common.config import RadarBase
 from common.crossing import CrossingManager, CrossingParams
@@ -86,10 +91,11 @@ class FusionParams(InitParams):
 
     gate_prob: chi-square(3) probability of the gate gamma_max on [48], and probability
         of the consistency test of module 64 (chi-square, 2 x contributing bases).
-    q, q_z: process noise powers sigma_vxy^2, sigma_vz^2 of [51] (m^2/s^3); q is the
-        initial value of every track's adapted q (module doc) and the PCRLB's model.
-    q_min, q_max, q_memory, q_gain: bounds, fading factor rho and exponent of the noise
-        level adjustment of q (module doc).
+    q, q_manoeuvre, q_z: process noise powers (m^2/s^3) of [51]: sigma_vxy^2 of the
+        quiet and of the manoeuvre model of the IMM (module doc), sigma_vz^2 of both;
+        q is also the PCRLB's model.
+    sojourn_quiet, sojourn_manoeuvre: mean time (s) spent in each model (IMM Markov
+        chain, common.imm.transition).
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
         at least this many contributing updated elementary tracks.
@@ -102,12 +108,11 @@ class FusionParams(InitParams):
     """
 
     gate_prob: float = 0.999
-    q: float = 4.0
+    q: float = 1.0
+    q_manoeuvre: float = 50.0
     q_z: float = 1.0
-    q_min: float = 1.0
-    q_max: float = 25.0
-    q_memory: float = 0.6
-    q_gain: float = 1.0
+    sojourn_quiet: float = 60.0
+    sojourn_manoeuvre: float = 10.0
     meas_inflation: float = 1.0
     confirm_cycles: int = 3
     confirm_bases: int = 2
@@ -167,8 +172,12 @@ class GlobalFusion:
         B = len(bases)
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "confirmed": ((), bool),
-                                          "ambiguous": ((), bool), "q": ((), float),
-                                          "nu": ((), float)})
+                                          "ambiguous": ((), bool),
+                                          "xm": ((2, 6), float), "Pm": ((2, 6, 6), float),
+                                          "mu": ((2,), float)})
+        self.q_models = np.array([self.p.q, self.p.q_manoeuvre])
+        self.sojourn = np.array([self.p.sojourn_quiet, self.p.sojourn_manoeuvre])
+        self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.chi2_gate = np.array([np.inf] + [chi2_gate(self.p.gate_prob, k)
@@ -205,10 +214,7 @@ class GlobalFusion:
         reported[list(msgs)] = True
         tab = self.table
         live = tab.active_indices()
-        x, P = tab.x.copy(), tab.P.copy()
-        if live.size:
-            x[live], P[live] = global_ekf.predict(tab.x[live], tab.P[live], t - tab.t_last[live],
-                                                  tab.q[live], self.p.q_z)
+        x, P, xm, Pm, c = self._predict(t, live)
         row = self._confirm(live, x, P, E, reported)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
@@ -216,15 +222,33 @@ class GlobalFusion:
         new, used = self._initialise(t, E, reported, free)
         if new.size:
             grow = tab.capacity - x.shape[0]
-            x = np.concatenate([x, np.zeros((grow, 6))])
-            P = np.concatenate([P, np.zeros((grow, 6, 6))])
+            x, P, xm, Pm, c = (np.concatenate([a, np.zeros((grow,) + a.shape[1:])])
+                               for a in (x, P, xm, Pm, c))
             row = np.concatenate([row, np.full((grow, row.shape[1]), -1, dtype=np.intp)])
             x[new], P[new] = tab.x[new], tab.P[new]
+            xm[new], Pm[new], c[new] = tab.xm[new], tab.Pm[new], tab.mu[new]
             for k in range(used.shape[1]):
                 row[new, E.base[used[:, k]]] = used[:, k]
             self._extend(new, x, P, E, reported, free, row)
-        self._update(t, tab.active_indices(), new, x, P, E, row)
+        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
         return self._manage(t, E, row)
+
+    def _predict(self, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
+        """IMM mixing and model-matched prediction [55]-[56] of the live tracks to t:
+        (x, P) combined, (xm, Pm) per model and the predicted model probabilities c, as
+        arrays over all slots (rows of other slots are copies of the table)."""
+        tab = self.table
+        x, P, xm, Pm, c = tab.x.copy(), tab.P.copy(), tab.xm.copy(), tab.Pm.copy(), tab.mu.copy()
+        if live.size:
+            n, M = live.size, self.q_models.size
+            dt = t - tab.t_last[live]
+            c[live], x0, P0 = imm.mix(tab.mu[live], tab.xm[live], tab.Pm[live],
+                                      imm.transition(dt, self.sojourn))
+            xp, Pp = global_ekf.predict(x0.reshape(n * M, 6), P0.reshape(n * M, 6, 6),
+                                        np.repeat(dt, M), np.tile(self.q_models, n), self.p.q_z)
+            xm[live], Pm[live] = xp.reshape(n, M, 6), Pp.reshape(n, M, 6, 6)
+            x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
+        return x, P, xm, Pm, c
 
     def _confirm(self, live: np.ndarray, x: np.ndarray, P: np.ndarray, E: ETrackSet,
                  reported: np.ndarray) -> np.ndarray:
@@ -297,7 +321,9 @@ class GlobalFusion:
         tab = self.table
         slots = tab.add(win.size)
         tab.x[slots], tab.P[slots], tab.t_last[slots] = cand.x[win], cand.P[win], t
-        tab.q[slots], tab.nu[slots] = self.p.q, 1.0
+        tab.xm[slots] = cand.x[win][:, None, :]
+        tab.Pm[slots] = cand.P[win][:, None, :, :]
+        tab.mu[slots] = self.mu0
         used = cand.rows[win]
         for k in range(2):
             tab.has[slots, E.base[used[:, k]]] = True
@@ -306,8 +332,11 @@ class GlobalFusion:
         return slots, used
 
     def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
-                P: np.ndarray, E: ETrackSet, row: np.ndarray) -> None:
-        """Crossing test (004), localisation (64) and EKF update (65) at time t."""
+                P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
+                row: np.ndarray) -> None:
+        """Crossing test (004), localisation (64) on the combined prediction (x, P), EKF
+        update (65) of every model of `models` (xm, Pm, c: module `_predict`), model
+        probabilities and combination (IMM) at time t."""
         tab = self.table
         r = row[live]
         active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
@@ -322,12 +351,12 @@ class GlobalFusion:
             c = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[multi],
                             self.tx, self.rx)
             sm = live[multi]
-            zm, Rm, chi2, xm = linearised_position(  # module 64
+            zm, Rm, chi2, xpost = linearised_position(  # module 64
                 x[sm][:, POS], P[sm][:, POS][:, :, POS], c, self.p.z_min)
             ok = chi2 <= self.chi2_gate[2 * active[multi].sum(1)]
             pos[multi] = np.where(ok[:, None], zm, np.nan)
             pos_cov[multi] = Rm
-            post[multi] = xm
+            post[multi] = xpost
         located = multi & np.isfinite(pos).all(axis=1)
         P_pos = P[live][:, POS][:, :, POS]
         post[~located] = np.nan
@@ -335,20 +364,30 @@ class GlobalFusion:
                                         z_meas=post, n_meas=int(located.sum()))
         tab.ambiguous[live] = amb
         infl = self.p.meas_inflation
+        xm, Pm, c = models
+        mu = c.copy()
+        M = self.q_models.size
         if located.any():
             s = live[located]
             rl = r[located]
-            x[s], P[s], nis = global_ekf.fused_update(  # module 65
-                x[s], P[s], pos[located], infl * pos_cov[located], E.z[rl, 1],
-                infl * E.Rz[rl, 1, 1], active[located], self.tx, self.rx, alpha[located])
-            self._adapt_q(s, nis / (3 + active[located].sum(1)))
+            xu, Pu, ll = global_ekf.fused_update(  # module 65, every model
+                *_per_model(xm[s], Pm[s]), *_repeat(M, pos[located], infl * pos_cov[located],
+                                                    E.z[rl, 1], infl * E.Rz[rl, 1, 1],
+                                                    active[located]),
+                self.tx, self.rx, np.repeat(alpha[located], M))
+            xm[s], Pm[s] = xu.reshape(xm[s].shape), Pu.reshape(Pm[s].shape)
+            mu[s] = imm.probabilities(c[s], alpha[located, None] * ll.reshape(-1, M))
         if single.any():
             s = live[single]
             rs = r[single][active[single]]
             bs = np.nonzero(active[single])[1]
-            x[s], P[s] = global_ekf.single_base_update(
-                x[s], P[s], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs], alpha[single])
-        tab.x[live], tab.P[live] = x[live], P[live]
+            xu, Pu, ll = global_ekf.single_base_update(
+                *_per_model(xm[s], Pm[s]),
+                *_repeat(M, E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs], alpha[single]))
+            xm[s], Pm[s] = xu.reshape(xm[s].shape), Pu.reshape(Pm[s].shape)
+            mu[s] = imm.probabilities(c[s], alpha[single, None] * ll.reshape(-1, M))
+        tab.xm[live], tab.Pm[live], tab.mu[live] = xm[live], Pm[live], mu[live]
+        tab.x[live], tab.P[live] = imm.combine(mu[live], xm[live], Pm[live])
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
@@ -358,13 +397,6 @@ class GlobalFusion:
         tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
                                     np.where(tab.confirmed[live], Status.CONFIRMED,
                                              Status.TENTATIVE))
-
-    def _adapt_q(self, slots: np.ndarray, nis_ratio: np.ndarray) -> None:
-        """Noise level adjustment of q (module doc) after a module 65 update with
-        normalised innovation squared per degree of freedom `nis_ratio`."""
-        tab, p = self.table, self.p
-        tab.nu[slots] = p.q_memory * tab.nu[slots] + (1.0 - p.q_memory) * nis_ratio
-        tab.q[slots] = np.clip(tab.q[slots] * tab.nu[slots] ** p.q_gain, p.q_min, p.q_max)
 
     def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> dict[str, Any]:
         """Module 61: scores, deletion, recycling; the gtracks message of the cycle."""
@@ -389,3 +421,13 @@ class GlobalFusion:
                 "ambiguous": bool(tab.ambiguous[s]),
             })
         return {"v": 1, "t": float(t), "tracks": tracks}
+
+
+def _per_model(xm: np.ndarray, Pm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, M, 6), (N, M, 6, 6) model-matched estimates as N * M rows."""
+    return xm.reshape(-1, 6), Pm.reshape(-1, 6, 6)
+
+
+def _repeat(M: int, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per-track arrays repeated for the M models of each track (rows as _per_model)."""
+    return tuple(np.repeat(a, M, axis=0) for a in arrays)

@@ -71,6 +71,40 @@ def mean_nees_interval(dof: int, samples: int, prob: float = 0.95) -> tuple[floa
     return float(chi2.ppf(a, n) / samples), float(chi2.ppf(1 - a, n) / samples)
 
 
+@dataclass(frozen=True)
+class MonteCarloNees:
+    """Average NEES over Monte Carlo runs at each time (Bar-Shalom, Li, Kirubarajan 5.4.2):
+    times (K,), anees (K,) the mean of the n (K,) samples (runs x targets) at each time,
+    and their two-sided chi-square(dof n) / n intervals lo, hi (K,)."""
+
+    times: np.ndarray
+    anees: np.ndarray
+    n: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @property
+    def inside(self) -> float:
+        """Fraction of the times at which the average NEES is inside its interval."""
+        return float(np.mean((self.anees >= self.lo) & (self.anees <= self.hi)))
+
+
+def monte_carlo_nees(runs: list[np.ndarray], dof: int = 3, prob: float = 0.95,
+                     min_fraction: float = 0.75) -> MonteCarloNees:
+    """Average NEES per time over independent runs: each run gives rows (time from the
+    run's start, NEES) of its targets. Under consistency n * ANEES_k is chi-square with
+    dof * n degrees of freedom at every time k, whatever the correlation in time within
+    a run (which makes the time average of one run a poor test). Times with fewer
+    samples than `min_fraction` of the most populated time are left out."""
+    rows = np.concatenate([np.asarray(r, dtype=float).reshape(-1, 2) for r in runs])
+    times, inv = np.unique(rows[:, 0], return_inverse=True)
+    n = np.bincount(inv, minlength=times.size)
+    anees = np.bincount(inv, rows[:, 1], minlength=times.size) / np.maximum(n, 1)
+    keep = n >= min_fraction * n.max()
+    lo, hi = np.array([mean_nees_interval(dof, int(k), prob) for k in n[keep]]).reshape(-1, 2).T
+    return MonteCarloNees(times[keep], anees[keep], n[keep], lo, hi)
+
+
 @dataclass
 class Evaluation:
     """Global tracks scored against truth, step by step (times must increase).

@@ -93,8 +93,11 @@ class Deployment:
                 time.sleep(0.1)
 
     def simulate(self, scenario: Path, seed: int = 1, scans: int | None = None,
-                 wait_alive: list[str] = (), timeout: float = 300.0) -> Child:
-        """Run the simulator to completion (waiting for ``wait_alive`` services first)."""
+                 wait_alive: list[str] = (), timeout: float = 300.0, repeat: int = 1,
+                 gap: float = 0.0) -> Child:
+        """Run the simulator to completion (waiting for ``wait_alive`` services first);
+        `repeat` runs with seeds seed, seed + 1, ... separated by `gap` target-free
+        seconds (``pfusion simulate --repeat --gap``)."""
         if self._token is None:
             self.announce()
         args = ["simulate", "--config", str(scenario), "--scenario", str(scenario),
@@ -103,6 +106,8 @@ class Deployment:
             args += ["--wait-alive", name]
         if scans is not None:
             args += ["--scans", str(scans)]
+        if repeat > 1:
+            args += ["--repeat", str(repeat), "--gap", str(gap)]
         sim = self.start("simulate", *args)
         deadline = time.monotonic() + timeout
         while sim.alive():

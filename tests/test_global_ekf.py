@@ -43,7 +43,7 @@ def test_padded_rows_equal_variable_dimension_update() -> None:
     vb = np.array([[project(x, TX[k], RX)[0, 1] + 1.0 for k in range(3)]])
     active = np.array([[True, False, True]])
     rx = np.tile(RX, (3, 1))
-    x1, P1, nis = fused_update(x, P, pos, pos_cov, vb, np.full((1, 3), 0.5), active, TX, rx)
+    x1, P1, loglik = fused_update(x, P, pos, pos_cov, vb, np.full((1, 3), 0.5), active, TX, rx)
     # reference: observation [x y z v_b1 v_b3] of dimension 3 + 2 only
     h, H = observation(x, TX, rx)
     keep = [0, 1, 2, 3, 5]
@@ -55,7 +55,8 @@ def test_padded_rows_equal_variable_dimension_update() -> None:
     np.testing.assert_allclose(x1, x2, rtol=1e-9)
     np.testing.assert_allclose(P1, P2, rtol=1e-9, atol=1e-9)
     y = z - h[:, keep]
-    assert nis[0] == pytest.approx(y[0] @ np.linalg.solve(S[0], y[0]))
+    nis = y[0] @ np.linalg.solve(S[0], y[0])
+    assert loglik[0] == pytest.approx(-0.5 * (nis + np.linalg.slogdet(2 * np.pi * S[0])[1]))
 
 
 def _truth(t: float) -> np.ndarray:

