@@ -11,6 +11,7 @@ independent. The other acceptance points are checked on every run."""
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,9 @@ import pytest
 from common.bistatic import POS
 from common.config import load, section
 from common.global_fusion import FusionParams
+from common.radar_chain import RadarChain
+from common.sim_scenario import load_scenario
+from common.simulator import run_scenario
 from common.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from services.evaluate.main import base_information
 from tests.harness import SCENARIOS, Deployment
@@ -94,6 +98,7 @@ class MonteCarlo:
     """The RUNS runs of one scenario through one chain."""
 
     name: str
+    scenario: Path
     runs: list[ChainRun]
     cycles: list[float]
     scan_times: list[float]
@@ -134,8 +139,26 @@ def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
     per_base = {b: split_runs(v, period) for b, v in etracks.items()}
     runs = [score_run(cfg, g, tr, {b: per_base[b][i] for b in per_base})
             for i, (g, tr) in enumerate(zip(split_runs(gtracks, period), split_runs(truth, period)))]
-    return MonteCarlo(name, runs, sorted(m["t"] for m in gtracks),
+    return MonteCarlo(name, scn, runs, sorted(m["t"] for m in gtracks),
                       sorted({m["t"] for m in etracks[cfg.bases[0].id]}))
+
+
+def test_in_process_chain_reproduces_the_processes(chain: MonteCarlo) -> None:
+    """common.radar_chain on seed 1 gives the global tracks the processes published in
+    run 0 (numbers equal, states to 1e-9): Monte Carlo studies in one process are
+    studies of the deployed chain."""
+    cfg = load(chain.scenario)
+    scn = load_scenario(tomllib.loads(chain.scenario.read_text()))
+    rc = RadarChain(cfg)
+    ours = [g for _, msgs in run_scenario(scn, cfg.bases, cfg.arrays, 1) for g in rc.step(msgs)]
+    theirs = chain.runs[0].by_t
+    assert [g["t"] for g in ours] == sorted(theirs)
+    for g in ours:
+        h = theirs[g["t"]]["tracks"]
+        assert [k["id"] for k in g["tracks"]] == [k["id"] for k in h], g["t"]
+        for a, b in zip(g["tracks"], h):
+            np.testing.assert_allclose(a["x"], b["x"], rtol=1e-9, atol=1e-9)
+            np.testing.assert_allclose(np.ravel(a["P"]), b["P"], rtol=1e-9, atol=1e-9)
 
 
 def test_one_cycle_per_scan(chain: MonteCarlo) -> None:
