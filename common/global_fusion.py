@@ -25,7 +25,11 @@ Cycle at t (001 figure 7):
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
     [46]); candidates that can be extended to more bases win conflicts, then lower
     residual; step 5 extends the new tracks through module 63;
-  seed 004: ambiguity of the predicted positions (CrossingManager), alpha as gain;
+  seed 004: ambiguity of the predicted plan positions (x, y) (CrossingManager),
+    alpha as gain; the altitude is left out (stated): it is resolved slowly by the
+    altitude bands, whose spread made every pair of tracks of dense.toml ambiguous,
+    kept them in memory mode and so never resolved (two aircraft at one plan position
+    are told apart by the elementary tracks' own crossing management);
   module 64 + 65: localisation by blocks from the contributing updated elementary
     tracks and the EKF update with [49]-[50];
   module 61: score = sum of the contributing elementary scores; tracks without any
@@ -69,7 +73,7 @@ from typing import Any
 
 import numpy as np
 
-from common import global_ekf, imm
+from common import global_ekf, global_mixture, imm
 from common.bistatic import POS
 from common.config import RadarBase
 from common.crossing import CrossingManager, CrossingParams
@@ -77,10 +81,11 @@ from common.decorrelation import Decorrelator
 from common.elementary import ElementaryParams
 from common.gating import chi2_gate
 from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
-from common.global_init import InitParams, azimuth_pairs, pair_candidates, select
+from common.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.localisation import Constraints, linearised_position
 from common.track_table import Status, TrackTable
 
+PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
 STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
                Status.COASTING: "coasting"}
 
@@ -96,6 +101,11 @@ class FusionParams(InitParams):
         q is also the PCRLB's model.
     sojourn_quiet, sojourn_manoeuvre: mean time (s) spent in each model (IMM Markov
         chain, common.imm.transition).
+    band_prune, band_prune_init, band_merge, band_linear: an altitude band of less mass
+        is dropped (band_prune_init at initialisation, where the two elementary
+        estimates can be biased: the weights then rest on one scan); two
+        bands whose altitudes differ by less than band_merge sigma are merged once
+        sigma_z < band_linear * height above the receiver (common.global_mixture).
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
         at least this many contributing updated elementary tracks.
@@ -113,6 +123,10 @@ class FusionParams(InitParams):
     q_z: float = 1.0
     sojourn_quiet: float = 60.0
     sojourn_manoeuvre: float = 10.0
+    band_prune: float = 1e-3
+    band_prune_init: float = 1e-6
+    band_merge: float = 0.5
+    band_linear: float = 0.2
     meas_inflation: float = 1.0
     confirm_cycles: int = 3
     confirm_bases: int = 2
@@ -170,11 +184,13 @@ class GlobalFusion:
         if len(bases) < 2 or np.ptp(self.rx, axis=0).max() > 1e-6:
             raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
         B = len(bases)
+        self.A = self.p.alt_bands
+        K = 2 * self.A  # components: altitude bands x motion models (common.global_mixture)
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "confirmed": ((), bool),
                                           "ambiguous": ((), bool),
-                                          "xm": ((2, 6), float), "Pm": ((2, 6, 6), float),
-                                          "mu": ((2,), float)})
+                                          "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
+                                          "mu": ((K,), float)})
         self.q_models = np.array([self.p.q, self.p.q_manoeuvre])
         self.sojourn = np.array([self.p.sojourn_quiet, self.p.sojourn_manoeuvre])
         self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
@@ -234,19 +250,15 @@ class GlobalFusion:
         return self._manage(t, E, row)
 
     def _predict(self, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
-        """IMM mixing and model-matched prediction [55]-[56] of the live tracks to t:
-        (x, P) combined, (xm, Pm) per model and the predicted model probabilities c, as
-        arrays over all slots (rows of other slots are copies of the table)."""
+        """IMM mixing and model-matched prediction [55]-[56] of every component of the
+        live tracks to t: (x, P) combined, (xm, Pm) per component and the predicted
+        weights c, as arrays over all slots (rows of other slots: copies of the table)."""
         tab = self.table
         x, P, xm, Pm, c = tab.x.copy(), tab.P.copy(), tab.xm.copy(), tab.Pm.copy(), tab.mu.copy()
         if live.size:
-            n, M = live.size, self.q_models.size
-            dt = t - tab.t_last[live]
-            c[live], x0, P0 = imm.mix(tab.mu[live], tab.xm[live], tab.Pm[live],
-                                      imm.transition(dt, self.sojourn))
-            xp, Pp = global_ekf.predict(x0.reshape(n * M, 6), P0.reshape(n * M, 6, 6),
-                                        np.repeat(dt, M), np.tile(self.q_models, n), self.p.q_z)
-            xm[live], Pm[live] = xp.reshape(n, M, 6), Pp.reshape(n, M, 6, 6)
+            c[live], xm[live], Pm[live] = global_mixture.predict(
+                tab.mu[live], tab.xm[live], tab.Pm[live], t - tab.t_last[live], self.A,
+                self.sojourn, self.q_models, self.p.q_z)
             x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
         return x, P, xm, Pm, c
 
@@ -320,11 +332,17 @@ class GlobalFusion:
         win = select(cand.rows, cand.cost - 1e6 * n_ext)
         tab = self.table
         slots = tab.add(win.size)
-        tab.x[slots], tab.P[slots], tab.t_last[slots] = cand.x[win], cand.P[win], t
-        tab.xm[slots] = cand.x[win][:, None, :]
-        tab.Pm[slots] = cand.P[win][:, None, :, :]
-        tab.mu[slots] = self.mu0
         used = cand.rows[win]
+        xb, Pb, wb = altitude_bands(cand.x[win][:, POS], E.y, E.R, E.base, used,
+                                    self.tx, self.rx, self.init_p)
+        M = self.mu0.size
+        xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
+        mu = global_mixture.prune_merge((wb[:, :, None] * self.mu0).reshape(win.size, -1),
+                                        xm, Pm, self.A, self.p.band_prune_init, self.p.band_merge,
+                                        self.p.band_linear, self.rx[0, 2])
+        tab.xm[slots], tab.Pm[slots], tab.mu[slots] = xm, Pm, mu
+        tab.x[slots], tab.P[slots] = imm.combine(mu, xm, Pm)
+        tab.t_last[slots] = t
         for k in range(2):
             tab.has[slots, E.base[used[:, k]]] = True
             tab.member[slots, E.base[used[:, k]]] = E.id[used[:, k]]
@@ -334,60 +352,64 @@ class GlobalFusion:
     def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
                 P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
                 row: np.ndarray) -> None:
-        """Crossing test (004), localisation (64) on the combined prediction (x, P), EKF
-        update (65) of every model of `models` (xm, Pm, c: module `_predict`), model
-        probabilities and combination (IMM) at time t."""
+        """Localisation (64) per altitude band, crossing test (004) on the combined
+        prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
+        `_predict`), new weights, pruning and merging (common.global_mixture) at t."""
         tab = self.table
         r = row[live]
         active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
         n_act = active.sum(1)
         multi, single = n_act >= 2, n_act == 1
-        pos = np.full((live.size, 3), np.nan)
-        pos_cov = np.full((live.size, 3, 3), np.nan)
-        post = np.full((live.size, 3), np.nan)
-        if multi.any():
-            rm = r[multi]
+        n, A = live.size, self.A
+        xl, Pl, cl = models[0][live], models[1][live], models[2][live]
+        M = cl.shape[1] // A
+        band = np.arange(cl.shape[1]) // M
+        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, A)
+        bpos, bpost = np.full((n, A, 3), np.nan), np.full((n, A, 3), np.nan)
+        bcov = np.full((n, A, 3, 3), np.nan)
+        bll, bok = np.zeros((n, A)), np.zeros((n, A), dtype=bool)
+        ti, ai = np.nonzero(multi[:, None] & (mass > 0))
+        if ti.size:
+            rm = r[ti]
             sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
-            c = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[multi],
-                            self.tx, self.rx)
-            sm = live[multi]
-            zm, Rm, chi2, xpost = linearised_position(  # module 64
-                x[sm][:, POS], P[sm][:, POS][:, :, POS], c, self.p.z_min)
-            ok = chi2 <= self.chi2_gate[2 * active[multi].sum(1)]
-            pos[multi] = np.where(ok[:, None], zm, np.nan)
-            pos_cov[multi] = Rm
-            post[multi] = xpost
-        located = multi & np.isfinite(pos).all(axis=1)
-        P_pos = P[live][:, POS][:, :, POS]
-        post[~located] = np.nan
-        alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, POS], P_pos,
-                                        z_meas=post, n_meas=int(located.sum()))
+            cons = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[ti],
+                               self.tx, self.rx)
+            zm, Rm, chi2, xpost, ll = linearised_position(  # module 64, per band
+                xb[ti, ai][:, POS], Pb[ti, ai][:, POS][:, :, POS], cons, self.p.z_min)
+            bpos[ti, ai], bcov[ti, ai], bpost[ti, ai], bll[ti, ai] = zm, Rm, xpost, ll
+            bok[ti, ai] = chi2 <= self.chi2_gate[2 * active[ti].sum(1)]
+        located = bok.any(axis=1)
+        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
+        post = np.where(located[:, None], bpost[np.arange(n), best], np.nan)
+        alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
+                                        P[live][:, PLAN][:, :, PLAN], z_meas=post[:, :2],
+                                        n_meas=int(located.sum()))
         tab.ambiguous[live] = amb
         infl = self.p.meas_inflation
-        xm, Pm, c = models
-        mu = c.copy()
-        M = self.q_models.size
-        if located.any():
-            s = live[located]
-            rl = r[located]
-            xu, Pu, ll = global_ekf.fused_update(  # module 65, every model
-                *_per_model(xm[s], Pm[s]), *_repeat(M, pos[located], infl * pos_cov[located],
-                                                    E.z[rl, 1], infl * E.Rz[rl, 1, 1],
-                                                    active[located]),
-                self.tx, self.rx, np.repeat(alpha[located], M))
-            xm[s], Pm[s] = xu.reshape(xm[s].shape), Pu.reshape(Pm[s].shape)
-            mu[s] = imm.probabilities(c[s], alpha[located, None] * ll.reshape(-1, M))
-        if single.any():
-            s = live[single]
-            rs = r[single][active[single]]
-            bs = np.nonzero(active[single])[1]
-            xu, Pu, ll = global_ekf.single_base_update(
-                *_per_model(xm[s], Pm[s]),
-                *_repeat(M, E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs], alpha[single]))
-            xm[s], Pm[s] = xu.reshape(xm[s].shape), Pu.reshape(Pm[s].shape)
-            mu[s] = imm.probabilities(c[s], alpha[single, None] * ll.reshape(-1, M))
-        tab.xm[live], tab.Pm[live], tab.mu[live] = xm[live], Pm[live], mu[live]
-        tab.x[live], tab.P[live] = imm.combine(mu[live], xm[live], Pm[live])
+        ll_comp = np.zeros(cl.shape)
+        mu = cl.copy()
+        ti, ki = np.nonzero(bok[:, band] & (cl > 0))
+        if ti.size:
+            rl, ai = r[ti], band[ki]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.fused_update(  # module 65
+                xl[ti, ki], Pl[ti, ki], bpos[ti, ai], infl * bcov[ti, ai], E.z[rl, 1],
+                infl * E.Rz[rl, 1, 1], active[ti], self.tx, self.rx, alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[located] = global_mixture.reweight(cl[located], alpha[located, None] * bll[located],
+                                                  ll_comp[located], A)
+        ti, ki = np.nonzero(single[:, None] & (cl > 0))
+        if ti.size:
+            rs = r[ti][active[ti]]
+            bs = np.nonzero(active[ti])[1]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.single_base_update(
+                xl[ti, ki], Pl[ti, ki], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs],
+                alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[single] = imm.probabilities(cl[single], ll_comp[single])
+        mu = global_mixture.prune_merge(mu, xl, Pl, A, self.p.band_prune, self.p.band_merge,
+                                       self.p.band_linear, self.rx[0, 2])
+        tab.xm[live], tab.Pm[live], tab.mu[live] = xl, Pl, mu
+        tab.x[live], tab.P[live] = imm.combine(mu, xl, Pl)
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
@@ -422,12 +444,3 @@ class GlobalFusion:
             })
         return {"v": 1, "t": float(t), "tracks": tracks}
 
-
-def _per_model(xm: np.ndarray, Pm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(N, M, 6), (N, M, 6, 6) model-matched estimates as N * M rows."""
-    return xm.reshape(-1, 6), Pm.reshape(-1, 6, 6)
-
-
-def _repeat(M: int, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Per-track arrays repeated for the M models of each track (rows as _per_model)."""
-    return tuple(np.repeat(a, M, axis=0) for a in arrays)

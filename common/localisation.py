@@ -49,6 +49,7 @@ import numpy as np
 from scipy.special import erf
 
 from common.angles import wrap_pi
+from common.imm import gaussian_loglik
 
 COV_CORRECTION = 1.5  # inverse of the 2/3 variance ratio of the erf weight [37]
 _CHILD = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
@@ -95,14 +96,14 @@ def gauss_newton(
 
     Returns the position (N, 3), z kept >= z_min, and the information inverse
     (J' W J)^-1 (N, 3, 3) at it (a tiny ridge keeps it finite when z is unobservable).
-    z_prior = (mean, sigma): the altitude pseudo-measurement z ~ N(mean, sigma^2) is
-    one more row of the least squares (module doc).
+    z_prior = (mean, sigma), scalars or (N,): the altitude pseudo-measurement
+    z ~ N(mean, sigma^2) is one more row of the least squares (module doc).
     """
     x = np.array(x0, dtype=float)
     w = c.valid.astype(float)
-    prior = np.zeros((3, 3))
+    prior = np.zeros((x.shape[0], 3, 3))
     if z_prior is not None:
-        prior[2, 2] = 1.0 / z_prior[1] ** 2
+        prior[:, 2, 2] = 1.0 / np.square(z_prior[1])
     for it in range(iterations + 1):
         d_t = x[:, None, :] - c.tx
         d_r = x[:, None, :] - c.rx
@@ -122,7 +123,7 @@ def gauss_newton(
         r = np.concatenate([res_rb * w / c.srb, res_az * w / c.saz], axis=1)
         g = (np.swapaxes(J, 1, 2) @ r[..., None])[..., 0]
         if z_prior is not None:
-            g[:, 2] += (z_prior[0] - x[:, 2]) * prior[2, 2]
+            g[:, 2] += (z_prior[0] - x[:, 2]) * prior[:, 2, 2]
         dx = np.linalg.solve(info, g[..., None])[..., 0]
         x = x + dx
         x[:, 2] = np.maximum(x[:, 2], z_min)
@@ -222,16 +223,19 @@ def _slr(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Statistical linear regression of the ranges and azimuths over N(x, S): mean
     (N, 2K), slope A (N, 2K, 3) and linearisation error covariance Omega (N, 2K, 2K),
-    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0), z kept >= z_min (when
-    that moves points, Omega may lose positivity: negative eigenvalues are set to 0)."""
+    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0) of the function h(X)
+    evaluated with z kept >= z_min (a function of X flat below z_min: the regression is
+    on the points themselves, so that its slope stays that of the data; negative
+    eigenvalues of Omega from the clamp are set to 0)."""
     lam, V = np.linalg.eigh(S)
     L = V * np.sqrt(3.0 * np.maximum(lam, 0.0))[:, None, :]
     dev = np.concatenate([np.swapaxes(L, 1, 2), -np.swapaxes(L, 1, 2)], axis=1)  # (N, 6, 3)
     pts = x[:, None, :] + dev
-    pts[..., 2] = np.maximum(pts[..., 2], z_min)
+    at = pts.copy()
+    at[..., 2] = np.maximum(at[..., 2], z_min)
     _, ref_az, _ = residuals(x, c)
     ref_az = c.az - ref_az  # azimuths at x
-    Y = _predict_meas(pts, c, ref_az)
+    Y = _predict_meas(at, c, ref_az)
     y_mean = Y.mean(axis=1)
     dY = Y - y_mean[:, None, :]
     dX = pts - pts.mean(axis=1, keepdims=True)
@@ -245,7 +249,7 @@ def _slr(
 def linearised_position(
     x_pred: np.ndarray, P_pred: np.ndarray, c: Constraints, z_min: float = 0.0,
     iterations: int = 4, floor_sigma: float = 1e5,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Module 64 during tracking: the position measurement of this scan's ranges and
     azimuths, linearised over the posterior given the predicted position.
 
@@ -260,9 +264,12 @@ def linearised_position(
     d = measurements - y (azimuths wrapped), so that the EKF of module 65, which adds the
     prediction, receives this scan's information only (no inflation; the floor only
     keeps R finite along an axis the scan does not observe). Returns (z (N, 3),
-    R (N, 3, 3), chi2 (N,), posterior position (N, 3)); chi2 = normalised squared
-    residuals of the linear model (R_eff) plus the prediction term at the posterior,
-    chi-square with 2 x (valid constraints) degrees of freedom.
+    R (N, 3, 3), chi2 (N,), posterior position (N, 3), loglik (N,)); chi2 = normalised
+    squared residuals of the linear model (R_eff) plus the prediction term at the
+    posterior, chi-square with 2 x (valid constraints) degrees of freedom; loglik = log
+    N(d - A (x_pred - x); 0, A P_pred A' + R_eff), the likelihood of the scan's ranges
+    and azimuths under the prediction (invalid slots add the same constant to every
+    prediction of a track: used to weigh altitude hypotheses of one track).
 
     Deviations from 001 (stated): 001 localises each scan by blocks [36]-[41] alone.
     For a low target, z is nearly unobservable in one scan (crossing.toml, 1.5 km at
@@ -308,4 +315,7 @@ def linearised_position(
     e = post - x_pred
     chi2 = (np.einsum("ni,ni->n", res, np.linalg.solve(R_eff, res[..., None])[..., 0])
             + np.einsum("ni,ni->n", e, (J0 @ e[..., None])[..., 0]))
-    return z, 0.5 * (R + np.swapaxes(R, 1, 2)), chi2, post
+    nu = d - (A @ (x_pred - x)[..., None])[..., 0]
+    S = A @ P_pred @ np.swapaxes(A, 1, 2) + R_eff
+    nis = np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[..., None])[..., 0])
+    return z, 0.5 * (R + np.swapaxes(R, 1, 2)), chi2, post, gaussian_loglik(nis, S)

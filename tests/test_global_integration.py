@@ -125,11 +125,7 @@ def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, li
                     scores, nees)
 
 
-ALTITUDE = pytest.mark.xfail(reason="issue 4: low-altitude initialisation (crossing target 2)",
-                             strict=False)
-
-
-@pytest.fixture(scope="module", params=["two_targets", pytest.param("crossing", marks=ALTITUDE)])
+@pytest.fixture(scope="module", params=["two_targets", "crossing"])
 def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> MonteCarlo:
     name = request.param
     scn = SCENARIOS / f"{name}.toml"

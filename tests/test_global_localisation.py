@@ -40,7 +40,7 @@ def test_scan_measurement_nees(truth: list[float], sig: list[float], slack: floa
     tr = np.tile(truth, (n, 1))
     Pp = np.diag(np.square(sig))
     xp = tr + rng.standard_normal((n, 3)) * sig
-    z, R, chi2, post = linearised_position(xp, np.tile(Pp, (n, 1, 1)), _scan(tr, rng))
+    z, R, chi2, post, _ = linearised_position(xp, np.tile(Pp, (n, 1, 1)), _scan(tr, rng))
     lo, hi = mean_nees_interval(3, n, 0.99)
     e = z - tr
     assert lo <= np.mean(np.einsum("ni,ni->n", e, np.linalg.solve(R, e[..., None])[..., 0])) <= hi
@@ -56,7 +56,7 @@ def test_information_tends_to_jacobian() -> None:
     (J by central differences) at the posterior."""
     x = np.array([[20000.0, 36000.0, 1500.0]])
     c = _scan(x, np.random.default_rng(1))
-    _, R, _, post = linearised_position(x, np.eye(3)[None], c)
+    _, R, _, post, _ = linearised_position(x, np.eye(3)[None], c)
     J = np.zeros((6, 3))
     for i in range(3):
         d = np.zeros((1, 3))
