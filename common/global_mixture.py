@@ -73,32 +73,38 @@ def reweight(c: np.ndarray, band_loglik: np.ndarray, comp_loglik: np.ndarray, A:
 
 def prune_merge(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, A: int, prune: float,
                 merge_sigma: float, linear: float, z_ref: float) -> np.ndarray:
-    """Drop bands of mass < prune and merge two bands whose mean altitudes differ by less
-    than merge_sigma * sqrt(var_a + var_b) once both are linear: sigma_z < linear *
-    (z - z_ref), z_ref the receiver's altitude (before that a merged band would be one
-    Gaussian in a flat-bottomed likelihood again). In place for xm, Pm; returns mu."""
+    """Drop bands of mass < prune, then merge each band into the nearest live band below
+    it when their mean altitudes differ by less than merge_sigma * sqrt(var_a + var_b)
+    and both are linear: sigma_z < linear * (z - z_ref), z_ref the receiver's altitude
+    (before that a merged band would be one Gaussian in a flat-bottomed likelihood
+    again). Moment matching per model; in place for xm, Pm; returns mu."""
     N, K = mu.shape
     M = K // A
     mu = mu.reshape(N, A, M).copy()
+    mu[mu.sum(axis=2) < prune] = 0.0
     xb, Pb = bands(xm, A), bands(Pm, A)
-    mass = mu.sum(axis=2)
-    mu[mass < prune] = 0.0
-    for a in range(A):
-        for b in range(a + 1, A):
-            ma, xa, Pa = band_moments(mu.reshape(N, K), xm, Pm, A)
-            sz = np.sqrt(Pa[:, [a, b], 4, 4])
-            live = (ma[:, a] > 0) & (ma[:, b] > 0) & np.all(sz < linear * (xa[:, [a, b], 4] - z_ref), axis=1)
-            dz = np.abs(xa[:, a, 4] - xa[:, b, 4])
-            n = np.flatnonzero(live & (dz < merge_sigma * np.sqrt(Pa[:, a, 4, 4] + Pa[:, b, 4, 4])))
-            if n.size == 0:
-                continue
-            w = np.stack([mu[n, a], mu[n, b]], axis=2)  # (n, M, 2) per model
+    rows = np.flatnonzero((mu.sum(axis=2) > 0).sum(axis=1) >= 2)
+    prev = np.full(rows.size, -1)
+    for b in range(A):
+        live = mu[rows, b].sum(axis=1) > 0
+        k = np.flatnonzero(live & (prev >= 0))
+        if k.size:
+            r, a = rows[k], prev[k]
+            ma, xa, Pa = band_moments(mu[r, a], xb[r, a], Pb[r, a], 1)
+            mb, xz, Pz = band_moments(mu[r, b], xb[r, b], Pb[r, b], 1)
+            z = np.stack([xa[:, 0, 4], xz[:, 0, 4]], axis=1)
+            sz = np.sqrt(np.stack([Pa[:, 0, 4, 4], Pz[:, 0, 4, 4]], axis=1))
+            ok = (np.all(sz < linear * (z - z_ref), axis=1)
+                  & (np.abs(z[:, 0] - z[:, 1]) < merge_sigma * np.sqrt((sz**2).sum(axis=1))))
+            r, a = r[ok], a[ok]
+            w = np.stack([mu[r, a], mu[r, b]], axis=2)  # (n, M, 2): per model
             tot = w.sum(axis=2)
-            wn = w / np.maximum(tot, 1e-300)[..., None]
-            xs = np.stack([xb[n, a], xb[n, b]], axis=2)  # (n, M, 2, 6)
-            Ps = np.stack([Pb[n, a], Pb[n, b]], axis=2)
-            x, P = imm.combine(wn.reshape(-1, 2), xs.reshape(-1, 2, 6), Ps.reshape(-1, 2, 6, 6))
-            xb[n, a], Pb[n, a] = x.reshape(-1, M, 6), P.reshape(-1, M, 6, 6)
-            mu[n, a], mu[n, b] = tot, 0.0
+            wn = (w / np.maximum(tot, 1e-300)[..., None]).reshape(-1, 2)
+            x, P = imm.combine(wn, np.stack([xb[r, a], xb[r, b]], axis=2).reshape(-1, 2, 6),
+                               np.stack([Pb[r, a], Pb[r, b]], axis=2).reshape(-1, 2, 6, 6))
+            xb[r, a], Pb[r, a] = x.reshape(-1, M, 6), P.reshape(-1, M, 6, 6)
+            mu[r, a], mu[r, b] = tot, 0.0
+            live[k[ok]] = False  # merged: the band below stays the reference
+        prev = np.where(live, b, prev)
     mu = mu.reshape(N, K)
     return mu / mu.sum(axis=1, keepdims=True)
