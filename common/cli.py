@@ -41,6 +41,12 @@ def add_common(p: argparse.ArgumentParser, config_required: bool = True) -> None
     )
 
 
+def add_base_service(p: argparse.ArgumentParser) -> None:
+    """The arguments of a per-base radar service: add_common and --base."""
+    add_common(p)
+    p.add_argument("--base", required=True, help="bistatic base id (a [[radar.base]] id)")
+
+
 def load_config(args: argparse.Namespace) -> Config:
     """The deployment config of ``args`` (every table checked), with --connect applied."""
     from common.sections import check_all

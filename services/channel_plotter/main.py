@@ -10,16 +10,14 @@ from __future__ import annotations
 import argparse
 
 from common import protocol
-from common.cli import add_common, load_config
+from common.cli import add_base_service, load_config
 from common.config import section
 from common.plot_fusion import LateInput, PlotFusion, PlotterParams
 from common.radar_chain import fused_message, plots_of
 from common.service import Rejected, Service
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_common(p)
-    p.add_argument("--base", required=True, help="bistatic base id (a [[radar.base]] id)")
+add_arguments = add_base_service  # --config, --connect, --base
 
 
 def main(args: argparse.Namespace) -> int:
