@@ -240,10 +240,19 @@ def _slr(
     dY = Y - y_mean[:, None, :]
     dX = pts - pts.mean(axis=1, keepdims=True)
     Psi = np.swapaxes(dX, 1, 2) @ dY / 6.0  # (N, 3, 2K)
-    A = np.swapaxes(np.linalg.solve(S, Psi), 1, 2)
+    A = np.swapaxes(_inv_sym(S) @ Psi, 1, 2)
     Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ S @ np.swapaxes(A, 1, 2)
     lam_o, V_o = np.linalg.eigh(0.5 * (Omega + np.swapaxes(Omega, 1, 2)))
     return y_mean, A, (V_o * np.maximum(lam_o, 0.0)[:, None, :]) @ np.swapaxes(V_o, 1, 2)
+
+
+def _inv_sym(A: np.ndarray) -> np.ndarray:
+    """Inverse of symmetric matrices (N, 3, 3); the pseudo-inverse if one is singular in
+    floating point (a degenerate prediction must not stop the whole cycle)."""
+    try:
+        return np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(A, hermitian=True)
 
 
 def linearised_position(
@@ -283,7 +292,7 @@ def linearised_position(
     adds Omega for the curvature it cannot follow, so the information is honest while
     the altitude is uncertain and tends to the Jacobian's once it is known.
     """
-    J0 = np.linalg.inv(P_pred)
+    J0 = _inv_sym(P_pred)
     x, S = np.array(x_pred, dtype=float), np.array(P_pred, dtype=float)
     w = c.valid.astype(float)
     K = c.rb.shape[1]
@@ -304,13 +313,13 @@ def linearised_position(
         g = (AtW @ d[..., None])[..., 0]
         if it == iterations:
             break
-        S = np.linalg.inv(info + J0)
+        S = _inv_sym(info + J0)
         x = x + (S @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
         x[:, 2] = np.maximum(x[:, 2], z_min)
         S = 0.5 * (S + np.swapaxes(S, 1, 2))
-    R = np.linalg.inv(info + np.eye(3) / floor_sigma**2)
+    R = _inv_sym(info + np.eye(3) / floor_sigma**2)
     z = x + (R @ g[..., None])[..., 0]
-    post = x + (np.linalg.inv(info + J0) @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
+    post = x + (_inv_sym(info + J0) @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
     res = d - (A @ (post - x)[..., None])[..., 0]
     e = post - x_pred
     chi2 = (np.einsum("ni,ni->n", res, np.linalg.solve(R_eff, res[..., None])[..., 0])

@@ -66,3 +66,12 @@ def test_information_tends_to_jacobian() -> None:
         J[:, i] = -np.concatenate([rp - rm, ap - am], axis=1)[0]
     W = np.diag(np.concatenate([np.full(3, SRB**-2), np.full(3, SAZ**-2)]))
     np.testing.assert_allclose(np.linalg.inv(R[0]), J.T @ W @ J, rtol=1e-3, atol=1e-12)
+
+
+def test_singular_prediction_does_not_raise() -> None:
+    """A prediction with an exactly singular covariance (a degenerate track) gives a
+    finite answer instead of stopping the cycle."""
+    c = _scan(np.array([[20000.0, 40000.0, 5000.0]]), np.random.default_rng(0))
+    P = np.diag([1e4, 1e4, 0.0])[None]
+    z, _, _, post, _ = linearised_position(np.array([[20000.0, 40000.0, 5000.0]]), P, c)
+    assert np.isfinite(z).all() and np.isfinite(post).all()
