@@ -27,8 +27,9 @@ import numpy as np
 from common.bistatic import POS, project
 from common.config import load, section
 from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.global_fusion import STATUS_NAME, FusionParams, GlobalFusion
+from common.global_fusion import FusionParams, GlobalFusion
 from common.plot_fusion import Plots
+from common.radar_chain import etracks_message
 from common.pcrlb import Evaluation, score_targets
 
 DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"
@@ -46,7 +47,6 @@ def core_benchmark(n: int, cycles: int = 40) -> tuple[float, float, float]:
     gf = GlobalFusion(cfg.bases, FusionParams())
     trk = {b.id: ElementaryTracker(ElementaryParams(), RadarCrossingParams(enabled=False))
            for b in cfg.bases}
-    status = {int(k): v for k, v in STATUS_NAME.items()}
     times, err = [], []
     for k in range(cycles):
         s = np.zeros((n, 6))
@@ -57,11 +57,7 @@ def core_benchmark(n: int, cycles: int = 40) -> tuple[float, float, float]:
             sig = np.tile(SIG, (n, 1))
             r = trk[b.id].step(float(k), Plots(y[:, 0], y[:, 1], y[:, 2] % (2 * np.pi), sig[:, 0],
                                                sig[:, 1], sig[:, 2], np.full(n, 3)))
-            msgs.append({"v": 1, "t": float(k), "base": b.id, "tracks": [
-                {"id": int(r.id[i]), "status": status[int(r.status[i])], "x": r.x[i].tolist(),
-                 "P": r.P[i].ravel().tolist(), "score": float(r.score[i]), "n_ch": 3,
-                 "updated": bool(r.updated[i]), "ambiguous": bool(r.ambiguous[i])}
-                for i in range(len(r))]})
+            msgs.append(etracks_message(b.id, r))
         for m in msgs[:-1]:
             gf.push(m)
         t0 = time.perf_counter()

@@ -94,11 +94,9 @@ from common.gating import chi2_gate
 from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
 from common.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.localisation import Constraints, linearised_position
-from common.track_table import Status, TrackTable
+from common.track_table import STATUS_NAME, Status, TrackTable
 
 PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
-STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
-               Status.COASTING: "coasting"}
 
 
 @dataclass(frozen=True)

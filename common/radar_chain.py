@@ -21,11 +21,7 @@ from common.crossing import CrossingParams
 from common.elementary import ElementaryParams, ElementaryTracker, ElementaryTracks, RadarCrossingParams
 from common.global_fusion import FusionParams, GlobalFusion
 from common.plot_fusion import PlotFusion, PlotterParams, Plots
-from common.track_table import Status
-
-STATUS = {int(Status.TENTATIVE): "tentative", int(Status.CONFIRMED): "confirmed",
-          int(Status.COASTING): "coasting"}
-
+from common.track_table import STATUS_NAME, Status
 
 def fused_message(base: str, t: float, fused: Plots) -> dict[str, Any]:
     """The `radar/fused/<base>` message of one scan."""
@@ -39,7 +35,7 @@ def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
     return {
         "v": protocol.VERSION, "t": tracks.t, "base": base,
         "tracks": [
-            {"id": int(tracks.id[k]), "status": STATUS[int(tracks.status[k])],
+            {"id": int(tracks.id[k]), "status": STATUS_NAME[Status(int(tracks.status[k]))],
              "x": tracks.x[k], "P": tracks.P[k].ravel(), "score": float(tracks.score[k]),
              "n_ch": int(tracks.n_ch[k]), "updated": bool(tracks.updated[k]),
              "ambiguous": bool(tracks.ambiguous[k])}

@@ -26,6 +26,10 @@ class Status(IntEnum):
     DELETED = 3
 
 
+STATUS_NAME = {Status.TENTATIVE: "tentative", Status.CONFIRMED: "confirmed",
+               Status.COASTING: "coasting"}  # the wire's names of the live statuses
+
+
 class TrackTable:
     """Columns: id, status, score, n_updates, n_coast (consecutive misses), t_last, x, P,
     plus optional tracker-specific `extra` columns {name: (shape per track, dtype)}.

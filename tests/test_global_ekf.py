@@ -11,10 +11,10 @@ from common.bistatic import POS, project
 from common.config import RadarBase
 from common.global_ekf import fused_update, observation
 from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.global_fusion import STATUS_NAME, FusionParams, GlobalFusion
+from common.global_fusion import FusionParams, GlobalFusion
 from common.plot_fusion import Plots
+from common.track_table import STATUS_NAME, Status
 
-STATUS = {int(k): v for k, v in STATUS_NAME.items()}
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0], [5000.0, -52000.0, 400.0]])
@@ -91,7 +91,7 @@ class _Synth:
                 r = self.trk[(b.id, i)].step(t, plot)
                 if i in drop:
                     continue
-                tracks += [{"id": i + 1, "status": STATUS[int(r.status[k])], "x": r.x[k].tolist(),
+                tracks += [{"id": i + 1, "status": STATUS_NAME[Status(int(r.status[k]))], "x": r.x[k].tolist(),
                             "P": r.P[k].ravel().tolist(), "score": float(r.score[k]),
                             "n_ch": int(r.n_ch[k]), "updated": bool(r.updated[k]),
                             "ambiguous": bool(r.ambiguous[k])} for k in range(len(r))]
