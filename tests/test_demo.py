@@ -24,7 +24,7 @@ def test_demo_runs_everything_and_draws(tmp_path: Path) -> None:
     out = r.stdout
     assert ", lost 0," in out and "out of order 0" in out
     assert "radar (confirmed global tracks vs truth" in out and "mean GOSPA" in out
-    assert "PCRLB m" in out and "95% interval of the mean NEES" in out
+    assert "PCRLB m" in out and "NEES3 / NEES6" in out
     assert "confirmed bearing tracks" in out
     expected = (int(SIZE_IN[0] * DPI), int(SIZE_IN[1] * DPI))
     for name in ("radar.png", "sonar.png"):
