@@ -5,6 +5,8 @@ A service registers handlers ``handler(key, payload)`` and lets :meth:`Service.r
 drain its :class:`~common.bus.Inbox` on the main thread. A handler raises
 :class:`~common.protocol.DecodeError` (or :class:`Rejected`) for bad input: the runtime
 logs the reason (first time per reason, then every 1000th), counts it and goes on.
+Samples that never arrived are counted per key from the publishers' stamps
+(``common.sequence``) and logged the same way.
 """
 
 from __future__ import annotations
@@ -21,13 +23,12 @@ import numpy as np
 import zenoh
 
 from common import protocol
-from common.bus import Inbox, open_session
+from common.bus import LOG_EVERY, Inbox, LossCount, Publisher, open_session
 from common.config import Config
 
 Handler = Callable[[str, bytes], None]
 QueryHandler = Callable[[zenoh.Query], None]
 METRICS_PERIOD_S = 2.0
-LOG_EVERY = 1000
 
 
 class Rejected(ValueError):
@@ -49,13 +50,14 @@ class Service:
         self.inbox = Inbox()
         self.counters: Counter[str] = Counter()
         self.rejected: Counter[str] = Counter()
+        self.losses = LossCount(self.log)
         self.last_t: float | None = None
         self._durations: deque[float] = deque(maxlen=2000)
         self._handlers: dict[str, Handler] = {}
         self._query_handlers: dict[str, QueryHandler] = {}
         self._routes: list[tuple[zenoh.KeyExpr, Handler]] = []
         self._qroutes: list[tuple[zenoh.KeyExpr, QueryHandler]] = []
-        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._publishers: dict[str, Publisher] = {}
         self._entities: list[Any] = []
         self._stop = threading.Event()
         self.session = open_session(cfg.zenoh)
@@ -77,15 +79,10 @@ class Service:
         self._entities.append(self.session.declare_queryable(ke, self.inbox.on_query))
 
     def publish(self, suffix: str, msg: dict[str, Any]) -> None:
-        """Encode and put ``msg`` on root/suffix (reliable, BLOCK: never dropped)."""
+        """Encode and put ``msg`` on root/suffix (reliable, BLOCK, stamped)."""
         pub = self._publishers.get(suffix)
         if pub is None:
-            pub = self.session.declare_publisher(
-                self.key(suffix),
-                congestion_control=zenoh.CongestionControl.BLOCK,
-                reliability=zenoh.Reliability.RELIABLE,
-            )
-            self._publishers[suffix] = pub
+            pub = self._publishers[suffix] = Publisher(self.session, self.key(suffix))
         pub.put(protocol.encode(msg))
         self.counters["out"] += 1
 
@@ -132,6 +129,11 @@ class Service:
             env.query.drop()
             return
         self.counters["in"] += 1
+        if env.attachment is not None:
+            try:
+                self.losses.check(env.key, env.attachment)
+            except ValueError as e:  # the sample itself is still handled
+                self.reject("attachment", str(e), env.key)
         for route, handler in self._routes:
             if route.intersects(ke):
                 self._guard(env.key, lambda: handler(env.key, env.payload))
@@ -159,14 +161,15 @@ class Service:
             "in": self.counters["in"],
             "out": self.counters["out"],
             "rejected": dict(self.rejected),
+            "missed": dict(self.losses.missed),
             "p50_ms": float(np.percentile(d, 50)) if d.size else 0.0,
             "p99_ms": float(np.percentile(d, 99)) if d.size else 0.0,
             "queue": self.inbox.depth,
         }
 
     def close(self) -> None:
+        """Undeclare subscribers and queryables, then close the session, which delivers
+        the queued output (publishers are not undeclared: see common.bus.Publisher)."""
         for e in self._entities:
             e.undeclare()
-        for p in self._publishers.values():
-            p.undeclare()
         self.session.close()

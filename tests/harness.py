@@ -3,6 +3,7 @@ services as child processes, and an in-process collector of decoded messages."""
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -10,7 +11,7 @@ from types import TracebackType
 from typing import Any
 
 from common import protocol
-from common.bus import Inbox, open_session
+from common.bus import Inbox, LossCount, open_session
 from common.cli import COMMANDS
 from common.config import ZenohConfig, load
 from common.deployment import plan
@@ -33,6 +34,7 @@ class Deployment:
         self.session = open_session(ZenohConfig([self.endpoint], [], ROOT))
         self.inbox = Inbox()
         self.messages: list[tuple[str, dict[str, Any]]] = []
+        self.losses = LossCount(logging.getLogger("collector"))
         self._subs: list[Any] = []
         self._token: Any = None
 
@@ -119,8 +121,11 @@ class Deployment:
         return sim
 
     def drain(self) -> None:
-        """Decode everything received so far into ``messages`` (raises on invalid data)."""
+        """Decode everything received so far into ``messages`` and count the samples
+        that never arrived in ``losses`` (raises on invalid data)."""
         while (env := self.inbox.get(0.0)) is not None:
+            if env.attachment is not None:
+                self.losses.check(env.key, env.attachment)
             kind = kind_of(env.key, ROOT)
             msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
             self.messages.append((env.key, msg))

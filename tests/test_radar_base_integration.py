@@ -11,6 +11,7 @@ import numpy as np
 from common import protocol
 from common.angles import wrap_pi
 from common.bistatic import azimuth, bistatic_range
+from common.bus import stamp
 from common.config import load
 from tests.harness import ROOT, SCENARIOS, Deployment
 
@@ -95,30 +96,35 @@ def test_bad_plots_and_fused_are_counted_and_skipped(tmp_path: Path) -> None:
         d.start("tracker", "elementary-tracker", "--config", str(scn), "--base", "b1")
         d.wait_alive(["channel_plotter/b1", "elementary_tracker/b1"])
 
-        def put(key: str, payload: bytes) -> None:
-            d.session.put(f"{ROOT}/{key}", payload)
+        def put(key: str, payload: bytes, attachment: bytes | None = None) -> None:
+            d.session.put(f"{ROOT}/{key}", payload, attachment=attachment)
 
         def plots(t: float, ch: str, **kw: object) -> bytes:
             return protocol.encode({**good, "t": t, "seq": int(t), "channel": ch, **kw})
 
-        for t in (1.0, 2.0):
-            put("radar/plots/b1/c1", plots(t, "c1"))
+        # c1 carries publisher stamps 0, 1, 3, 6: three samples never arrived
+        for t, n in ((1.0, 0), (2.0, 1)):
+            put("radar/plots/b1/c1", plots(t, "c1"), stamp("sensor", n))
             put("radar/plots/b1/c2", plots(t, "c2"))
         put("radar/plots/b1/c1", b"\xc1garbage")
         put("radar/plots/b1/c1", plots(3.0, "c1", base="b9"))
         put("radar/plots/b1/c1", plots(3.0, "c1", rb=[float("nan")]))
         put("radar/plots/b1/c2", plots(1.5, "c2"))  # time going backwards on c2
         put("radar/fused/b1", b"not msgpack at all")
-        for t in (3.0, 4.0):
-            put("radar/plots/b1/c1", plots(t, "c1"))
-            put("radar/plots/b1/c2", plots(t, "c2"))
+        for t, n in ((3.0, 3), (4.0, 6)):
+            put("radar/plots/b1/c1", plots(t, "c1"), stamp("sensor", n))
+            put("radar/plots/b1/c2", plots(t, "c2"), b"\x93bad" if t == 3.0 else None)
+
+        def latest(service: str, field: str) -> dict:
+            ms = [m for k, m in d.messages if k == f"{ROOT}/metrics/{service}/b1"]
+            return ms[-1][field] if ms else {}
 
         def rejected(service: str) -> dict:
-            ms = [m for k, m in d.messages if k == f"{ROOT}/metrics/{service}/b1"]
-            return ms[-1]["rejected"] if ms else {}
+            return latest(service, "rejected")
 
         d.wait_for(lambda: len(d.of("radar/etracks/b1")) == 4
-                   and sum(rejected("channel_plotter").values()) >= 4
+                   and sum(rejected("channel_plotter").values()) >= 5
+                   and bool(latest("channel_plotter", "missed"))
                    and sum(rejected("elementary_tracker").values()) >= 1, timeout=30)
         # every scan was fused and tracked: the two plots of each scan made one track
         assert [m["t"] for m in d.of("radar/etracks/b1")] == [1.0, 2.0, 3.0, 4.0]
@@ -126,5 +132,8 @@ def test_bad_plots_and_fused_are_counted_and_skipped(tmp_path: Path) -> None:
         r = rejected("channel_plotter")
         assert r.get("decode:<payload>") == 1 and r.get("unknown_base") == 1
         assert r.get("decode:rb[0]") == 1 and r.get("time_backwards") == 1
+        assert r.get("attachment") == 1  # and its sample was still fused (t = 3 above)
+        assert latest("channel_plotter", "missed") == {f"{ROOT}/radar/plots/b1/c1": 3}
+        assert latest("elementary_tracker", "missed") == {}  # the plotter's stamps: no gap
         assert rejected("elementary_tracker") == {"decode:<payload>": 1}
         assert all(c.alive() for c in d.children)

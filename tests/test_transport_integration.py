@@ -4,20 +4,11 @@ from __future__ import annotations
 
 from collections import defaultdict
 from pathlib import Path
-from typing import Any
 
 from common.config import load
 from harness import SCENARIOS, Deployment
 
 SCANS = 1000
-
-
-def payload(d: Deployment) -> list[tuple[str, dict[str, Any]]]:
-    """The data messages received so far (not the status or liveliness ones). CI once
-    had 12 of 1000 truth samples missing when sim/status arrived (not reproduced in 40
-    runs here): the test waits a little so a late sample counts and a lost one fails
-    with its scan times."""
-    return [(k, m) for k, m in d.messages if "/sim/status" not in k and "/alive/" not in k]
 
 
 def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None:
@@ -26,11 +17,7 @@ def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None
         d.simulate(SCENARIOS / "dense.toml", seed=3, scans=SCANS)
         d.wait_for(lambda: bool(d.of("sim/status")), timeout=60)
         status = d.of("sim/status")[0]
-        try:
-            d.wait_for(lambda: len(payload(d)) >= status["published"], timeout=20)
-        except TimeoutError:
-            pass  # the assertions below name what is missing
-        data = payload(d)
+        data = [(k, m) for k, m in d.messages if "/sim/status" not in k and "/alive/" not in k]
         seqs: dict[str, list[int]] = defaultdict(list)
         for key, msg in data:
             if "seq" in msg:
@@ -40,7 +27,11 @@ def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None
     truth_t = [m["t"] for k, m in data if k.endswith("sim/truth/radar")]
     arrived = {round(m["t"], 6) for k, m in data if "/radar/plots/" in k}
     missing_truth = sorted(arrived - {round(t, 6) for t in truth_t})
-    assert len(data) == status["published"], f"lost: {gaps}, truth missing at t={missing_truth}"
+    assert len(data) == status["published"], (
+        f"lost: {gaps}, truth missing at t={missing_truth}, stamps say {dict(d.losses.missed)}")
+    assert not d.losses.missed
+    # CI once lost the last 12-17 truth samples: the simulator undeclared its publishers
+    # before closing its session (see common.bus.Publisher); the times above name them
     plot_keys = [k for k in seqs if "/radar/plots/" in k]
     cfg = load(SCENARIOS / "dense.toml")
     assert len(cfg.bases) == 4

@@ -19,7 +19,7 @@ import zenoh
 
 from common import protocol
 from common.cli import add_common, load_config
-from common.bus import open_session, stop_on_signals
+from common.bus import LossCount, open_session, stop_on_signals
 from common.recording import RecordWriter
 
 log = logging.getLogger("record")
@@ -39,10 +39,33 @@ class Stamped:
     """Zenoh callbacks stamp each sample with the monotonic clock and enqueue it."""
 
     def __init__(self) -> None:
-        self.q: queue.SimpleQueue[tuple[float, str, bytes]] = queue.SimpleQueue()
+        self.q: queue.SimpleQueue[tuple[float, str, bytes, bytes | None]] = queue.SimpleQueue()
 
     def on_sample(self, sample: zenoh.Sample) -> None:
-        self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes()))
+        att = sample.attachment
+        self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes(),
+                    None if att is None else att.to_bytes()))
+
+
+class Writer:
+    """Writes the wanted samples and counts the ones that never arrived (their
+    publishers' stamps, ``common.bus.LossCount``)."""
+
+    def __init__(self, writer: RecordWriter, wanted: list[zenoh.KeyExpr], t0: float) -> None:
+        self.writer, self.wanted, self.t0 = writer, wanted, t0
+        self.losses = LossCount(log)
+        self.last = 0.0
+
+    def take(self, stamp: float, key: str, payload: bytes, attachment: bytes | None) -> None:
+        if not any(w.intersects(zenoh.KeyExpr(key)) for w in self.wanted):
+            return
+        if attachment is not None:
+            try:
+                self.losses.check(key, attachment)
+            except ValueError as e:
+                log.error("%s: %s", key, e)
+        self.last = max(self.last, stamp - self.t0)
+        self.writer.write(key, self.last, payload)
 
 
 def finished(payload: bytes) -> bool:
@@ -65,27 +88,22 @@ def main(args: argparse.Namespace) -> int:
     with open_session(cfg.zenoh) as session, out.open("wb") as f:
         sub = session.declare_subscriber(f"{root}/**", inbox.on_sample)
         token = session.liveliness().declare_token(f"{root}/alive/record/{out.stem}")
-        writer = RecordWriter(f, root, time.time())
         t0 = time.monotonic()
+        rec = Writer(RecordWriter(f, root, time.time()), wanted, t0)
         end = t0 + args.duration if args.duration is not None else float("inf")
-        last = 0.0
         log.info("recording %s to %s", ", ".join(args.keyexpr), out)
         while not stop.is_set() and time.monotonic() < end:
             try:
-                stamp, key, payload = inbox.q.get(timeout=0.1)
+                stamp, key, payload, attachment = inbox.q.get(timeout=0.1)
             except queue.Empty:
                 continue
-            if any(w.intersects(zenoh.KeyExpr(key)) for w in wanted):
-                last = max(last, stamp - t0)
-                writer.write(key, last, payload)
+            rec.take(stamp, key, payload, attachment)
             if key == status_key and args.duration is None and finished(payload):
                 end = min(end, time.monotonic() + args.linger)
         token.undeclare()
         sub.undeclare()
         while not inbox.q.empty():
-            stamp, key, payload = inbox.q.get()
-            if any(w.intersects(zenoh.KeyExpr(key)) for w in wanted):
-                last = max(last, stamp - t0)
-                writer.write(key, last, payload)
-    log.info("wrote %d records to %s", writer.count, out)
+            rec.take(*inbox.q.get())
+    log.info("wrote %d records to %s (%d samples missed)", rec.writer.count, out,
+             sum(rec.losses.missed.values()))
     return 0

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import zenoh
 
-from common.bus import flush, open_session, stop_on_signals, wait_alive
+from common.bus import Publisher, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.recording import RecordReader, RecordingError
 
@@ -46,7 +46,6 @@ def main(args: argparse.Namespace) -> int:
             except RecordingError as e:
                 log.error("%s: %s", path, e)
                 return 2
-            flush(session, root)
     if reader.errors:
         log.warning("%s: last record truncated (%d bytes ignored)", path, reader.truncated_bytes)
     log.info("replayed %d records from %s", n, path)
@@ -56,27 +55,21 @@ def main(args: argparse.Namespace) -> int:
 def replay(session: zenoh.Session, reader: RecordReader, root: str, speed: float,
            stop: threading.Event) -> int:
     """Publish every record under ``root`` (in place of the recorded root); returns the count."""
-    pubs: dict[str, zenoh.Publisher] = {}
+    pubs: dict[str, Publisher] = {}
     n = 0
     wall0 = time.monotonic()
     prefix = reader.root + "/"
-    try:
-        for rec in reader:
-            if stop.is_set():
+    for rec in reader:
+        if stop.is_set():
+            break
+        if speed > 0:
+            delay = wall0 + rec.t / speed - time.monotonic()
+            if delay > 0 and stop.wait(delay):
                 break
-            if speed > 0:
-                delay = wall0 + rec.t / speed - time.monotonic()
-                if delay > 0 and stop.wait(delay):
-                    break
-            key = root + "/" + rec.key[len(prefix):] if rec.key.startswith(prefix) else rec.key
-            pub = pubs.get(key)
-            if pub is None:
-                pub = pubs[key] = session.declare_publisher(
-                    key, congestion_control=zenoh.CongestionControl.BLOCK,
-                    reliability=zenoh.Reliability.RELIABLE)
-            pub.put(rec.payload)
-            n += 1
-    finally:
-        for pub in pubs.values():
-            pub.undeclare()
+        key = root + "/" + rec.key[len(prefix):] if rec.key.startswith(prefix) else rec.key
+        pub = pubs.get(key)
+        if pub is None:
+            pub = pubs[key] = Publisher(session, key)
+        pub.put(rec.payload)
+        n += 1
     return n

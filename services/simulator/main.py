@@ -20,7 +20,7 @@ from pathlib import Path
 import zenoh
 
 from common import protocol
-from common.bus import flush, open_session, stop_on_signals, wait_alive
+from common.bus import Publisher, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.config import Config
 from common.sim_scenario import Scenario
@@ -72,14 +72,6 @@ def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat:
                 yield t_run, messages
 
 
-def publisher(session: zenoh.Session, key: str) -> zenoh.Publisher:
-    """A reliable BLOCK publisher (never drops). The first scan's publishers are declared
-    before waiting for the subscribers, so the routing of every key is settled before the
-    first sample."""
-    return session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK,
-                                     reliability=zenoh.Reliability.RELIABLE)
-
-
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     path = Path(args.scenario)
@@ -100,7 +92,9 @@ def main(args: argparse.Namespace) -> int:
         token = session.liveliness().declare_token(f"{root}/alive/simulate/{path.stem}")
         scans_iter = repeated(scn, cfg, args.seed, args.scans, args.repeat, args.gap)
         first = next(scans_iter, None)
-        pubs = {suffix: publisher(session, f"{root}/{suffix}") for suffix, _ in (first or (0, []))[1]}
+        # the first scan's publishers are declared before waiting for the subscribers, so
+        # the routing of every key is settled before the first sample
+        pubs = {suffix: Publisher(session, f"{root}/{suffix}") for suffix, _ in (first or (0, []))[1]}
         wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
         published = scans = 0
         t_first = t = 0.0
@@ -116,7 +110,7 @@ def main(args: argparse.Namespace) -> int:
                     break
             for suffix, msg in messages:
                 if suffix not in pubs:
-                    pubs[suffix] = publisher(session, f"{root}/{suffix}")
+                    pubs[suffix] = Publisher(session, f"{root}/{suffix}")
                 pubs[suffix].put(protocol.encode(msg))
                 published += 1
             scans += 1
@@ -124,10 +118,7 @@ def main(args: argparse.Namespace) -> int:
                   "scans": scans, "published": published}
         session.put(f"{root}/sim/status", protocol.encode(status),
                     congestion_control=zenoh.CongestionControl.BLOCK)
-        flush(session, root)
         log.info("published %d messages in %d scans (%.1f s wall)",
                  published, scans, time.monotonic() - wall0)
-        for pub in pubs.values():
-            pub.undeclare()
         token.undeclare()
     return 0

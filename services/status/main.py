@@ -15,7 +15,7 @@ from common.bus import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 LISTEN_S = 2.5
-COLUMNS = ("service", "instance", "in", "out", "rejected", "p50_ms", "p99_ms", "queue", "last_t")
+COLUMNS = ("service", "instance", "in", "out", "rejected", "missed", "p50_ms", "p99_ms", "queue", "last_t")
 log = logging.getLogger("status")
 
 
@@ -48,6 +48,7 @@ def table(live: list[tuple[str, str]], metrics: dict[tuple[str, str], dict[str, 
             continue
         rej = m.get("rejected", {})
         rows.append([*svc, str(m["in"]), str(m["out"]), str(sum(rej.values())),
+                     str(sum(m.get("missed", {}).values())),
                      f"{m['p50_ms']:.2f}", f"{m['p99_ms']:.2f}", str(m["queue"]), f"{m['t']:.3f}"])
         reasons.append(", ".join(f"{k}={v}" for k, v in sorted(rej.items())))
     widths = [max(len(r[i]) for r in rows) for i in range(len(COLUMNS))]
