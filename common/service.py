@@ -23,7 +23,7 @@ import numpy as np
 import zenoh
 
 from common import protocol
-from common.bus import LOG_EVERY, Inbox, LossCount, Publisher, open_session
+from common.bus import LOG_EVERY, Inbox, LossCount, Publisher, linger, open_session
 from common.config import Config
 
 Handler = Callable[[str, bytes], None]
@@ -60,6 +60,7 @@ class Service:
         self._publishers: dict[str, Publisher] = {}
         self._entities: list[Any] = []
         self._stop = threading.Event()
+        self._last_put = float("-inf")
         self.session = open_session(cfg.zenoh)
 
     def key(self, suffix: str) -> str:
@@ -84,6 +85,7 @@ class Service:
         if pub is None:
             pub = self._publishers[suffix] = Publisher(self.session, self.key(suffix))
         pub.put(protocol.encode(msg))
+        self._last_put = time.monotonic()
         self.counters["out"] += 1
 
     def reject(self, reason: str, detail: str, key: str) -> None:
@@ -168,8 +170,9 @@ class Service:
         }
 
     def close(self) -> None:
-        """Undeclare subscribers and queryables, then close the session, which delivers
-        the queued output (publishers are not undeclared: see common.bus.Publisher)."""
+        """Undeclare subscribers and queryables, linger after the last output, close the
+        session (publishers are not undeclared: see common.bus.Publisher)."""
         for e in self._entities:
             e.undeclare()
+        linger(self._last_put)
         self.session.close()

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import zenoh
 
-from common.bus import Publisher, open_session, stop_on_signals, wait_alive
+from common.bus import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.recording import RecordReader, RecordingError
 
@@ -46,6 +46,7 @@ def main(args: argparse.Namespace) -> int:
             except RecordingError as e:
                 log.error("%s: %s", path, e)
                 return 2
+            linger()
     if reader.errors:
         log.warning("%s: last record truncated (%d bytes ignored)", path, reader.truncated_bytes)
     log.info("replayed %d records from %s", n, path)

@@ -20,7 +20,7 @@ from pathlib import Path
 import zenoh
 
 from common import protocol
-from common.bus import Publisher, open_session, stop_on_signals, wait_alive
+from common.bus import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.config import Config
 from common.sim_scenario import Scenario
@@ -118,6 +118,7 @@ def main(args: argparse.Namespace) -> int:
                   "scans": scans, "published": published}
         session.put(f"{root}/sim/status", protocol.encode(status),
                     congestion_control=zenoh.CongestionControl.BLOCK)
+        linger()
         log.info("published %d messages in %d scans (%.1f s wall)",
                  published, scans, time.monotonic() - wall0)
         token.undeclare()
