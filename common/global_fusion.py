@@ -91,7 +91,8 @@ from common.crossing import CrossingManager, CrossingParams
 from common.decorrelation import Decorrelator
 from common.elementary import ElementaryParams
 from common.gating import chi2_gate
-from common.global_assoc import YR, ETrackSet, distance, gated_pairs, projections, resolve
+from common.global_assoc import (YR, ETrackSet, distance, gated_band_pairs, gated_pairs,
+                                 projections, resolve)
 from common.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.localisation import Constraints, linearised_position
 from common.track_table import STATUS_NAME, Status, TrackTable
@@ -240,10 +241,11 @@ class GlobalFusion:
         tab = self.table
         live = tab.active_indices()
         x, P, xm, Pm, c = self._predict(t, live)
-        row = self._confirm(live, x, P, E, reported)
+        bands = global_mixture.band_moments(c, xm, Pm, self.A)
+        row = self._confirm(live, bands, E, reported)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
-        self._extend(live, x, P, E, reported, free, row)
+        self._extend(live, bands, E, reported, free, row)
         new, used = self._initialise(t, E, reported, free)
         if new.size:
             grow = tab.capacity - x.shape[0]
@@ -254,7 +256,8 @@ class GlobalFusion:
             xm[new], Pm[new], c[new] = tab.xm[new], tab.Pm[new], tab.mu[new]
             for k in range(used.shape[1]):
                 row[new, E.base[used[:, k]]] = used[:, k]
-            self._extend(new, x, P, E, reported, free, row)
+            bands = global_mixture.band_moments(c, xm, Pm, self.A)
+            self._extend(new, bands, E, reported, free, row)
         self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
         return self._manage(t, E, row)
 
@@ -271,10 +274,12 @@ class GlobalFusion:
             x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
         return x, P, xm, Pm, c
 
-    def _confirm(self, live: np.ndarray, x: np.ndarray, P: np.ndarray, E: ETrackSet,
-                 reported: np.ndarray) -> np.ndarray:
+    def _confirm(self, live: np.ndarray, bands: tuple[np.ndarray, np.ndarray, np.ndarray],
+                 E: ETrackSet, reported: np.ndarray) -> np.ndarray:
         """Module 63 task 1: row of E of every membership (cap, B) after dissociating
-        members that left or fail the gate [48]; -1 where none or base not reported."""
+        members that left or fail the gate [48] in every live altitude band (`bands`:
+        band_moments of the predicted mixture; see global_assoc.gated_band_pairs);
+        -1 where none or base not reported."""
         tab = self.table
         B = len(self.base_ids)
         row = np.full((tab.capacity, B), -1, dtype=np.intp)
@@ -285,24 +290,30 @@ class GlobalFusion:
         k = b * (1 << 40) + tab.member[s, b]
         r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
         ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
+        mass, xb, Pb = bands
         for bb in np.unique(b[ok]):
             sel = np.flatnonzero(ok & (b == bb))
-            y_pred, GPG = projections(x[s[sel]], P[s[sel]], self.tx[bb], self.rx[bb])
-            ok[sel] = distance(y_pred, GPG, E.y[r[sel]], E.R[r[sel]]) <= self.gamma_max  # [48]
+            n, a = np.nonzero(mass[s[sel]] > 0)  # live bands of these memberships
+            y_pred, GPG = projections(xb[s[sel][n], a], Pb[s[sel][n], a], self.tx[bb], self.rx[bb])
+            gam = distance(y_pred, GPG, E.y[r[sel][n]], E.R[r[sel][n]])  # [48]
+            best = np.full(sel.size, np.inf)
+            np.minimum.at(best, n, gam)
+            ok[sel] = best <= self.gamma_max
         tab.has[s[~ok], b[~ok]] = False  # dissociation
         row[s[ok], b[ok]] = r[ok]
         return row
 
-    def _extend(self, slots: np.ndarray, x: np.ndarray, P: np.ndarray, E: ETrackSet,
-                reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
+    def _extend(self, slots: np.ndarray, bands: tuple[np.ndarray, np.ndarray, np.ndarray],
+                E: ETrackSet, reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
         """Module 63 tasks 2-3: free elementary tracks of base b to the tracks of
-        `slots` that do not contain b, by the resolution loop."""
+        `slots` that do not contain b, by the resolution loop (gate [48] per altitude
+        band: global_assoc.gated_band_pairs)."""
         tab = self.table
         for b in np.flatnonzero(reported):
             tracks = slots[~tab.has[slots, b]]
             ets = np.flatnonzero(free & (E.base == b))
-            i, m, g = gated_pairs(x, P, tracks, ets, E, self.tx[b], self.rx[b],
-                                  self.az_gate, self.gamma_max)
+            i, m, g = gated_band_pairs(*bands, tracks, ets, E, self.tx[b], self.rx[b],
+                                       self.az_gate, self.gamma_max)
             ti, mi = resolve(i, m, g)
             tab.has[ti, b] = True
             tab.member[ti, b] = E.id[mi]

@@ -1,5 +1,5 @@
 """Tests of module 63 (common.global_assoc): g [47] Jacobian, distance [48], the
-two-best-candidates resolution loop."""
+per-altitude-band gate, the two-best-candidates resolution loop."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from common.bistatic import project, project_jacobian
-from common.global_assoc import distance, projections, resolve
+from common.global_assoc import (ETrackSet, distance, gated_band_pairs, gated_pairs,
+                                 projections, resolve)
 
 TX = np.array([-35000.0, 20000.0, 300.0])
 RX = np.array([0.0, 0.0, 30.0])
@@ -42,6 +43,46 @@ def test_distance_is_48() -> None:
     y2 = y.copy()
     y2[0, 2] += 2 * np.pi
     assert distance(y_pred, GPG, y2, R)[0] == pytest.approx(expect)
+
+
+def _etracks(y: np.ndarray, R: np.ndarray) -> ETrackSet:
+    n = y.shape[0]
+    ones, zeros = np.ones(n, dtype=bool), np.zeros(n, dtype=bool)
+    return ETrackSet(np.zeros(n, dtype=np.intp), np.arange(n), y, R, np.zeros(n), ones, ones,
+                     zeros, y, R, ones)
+
+
+def test_band_gate_passes_when_one_live_band_passes() -> None:
+    """A high, close target (truth z 11.1 km) held by two altitude bands, 3.8 km (mass
+    0.99) and 11 km (0.01): its elementary track fails [48] against the mixture's
+    moments (mean z 3.9 km) but passes against the 11 km band; a dead band (mass 0)
+    does not count; gamma is the best band's."""
+    truth = np.array([6000.0, 70.0, -31000.0, 150.0, 11100.0, 0.0])
+    y_true = project(truth[None], TX, RX)
+    R = np.diag([150.0**2, 1.5**2, np.radians(1.0) ** 2])[None]
+    xb = np.array([[[6100.0, 70.0, -31200.0, 150.0, 3800.0, 0.0],
+                    [6050.0, 70.0, -31100.0, 150.0, 11000.0, 0.0],
+                    [0.0] * 6]])
+    Pb = np.repeat(np.diag([200.0**2, 20.0**2, 200.0**2, 20.0**2, 600.0**2, 5.0**2])[None, None],
+                   3, axis=1)
+    mass = np.array([[0.99, 0.01, 0.0]])
+    E = _etracks(y_true, R)
+    mean = (mass[0, :, None] * xb[0]).sum(axis=0)[None]
+    spread = xb[0, :2] - mean
+    P_mix = (mass[0, :2, None, None] * (Pb[0, :2] + spread[:, :, None] * spread[:, None, :])).sum(0)
+    assert mean[0, 4] == pytest.approx(3872.0)
+    gamma_max = 16.3  # chi-square(3) at 0.999
+    i, m, g = gated_pairs(mean, P_mix[None], np.array([0]), np.array([0]), E, TX, RX, np.pi,
+                          gamma_max)
+    assert i.size == 0  # the mixture's single Gaussian rejects it
+    i, m, g = gated_band_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX, np.pi,
+                               gamma_max)
+    y2, S2 = projections(xb[0, 1:2], Pb[0, 1:2], TX, RX)
+    assert (i.tolist(), m.tolist()) == ([0], [0])
+    assert g[0] == pytest.approx(distance(y2, S2, y_true, R)[0])
+    mass[0, 1] = 0.0  # the 11 km band pruned: nothing left to pass
+    assert gated_band_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX, np.pi,
+                            gamma_max)[0].size == 0
 
 
 def test_resolution_loop_two_candidates() -> None:
