@@ -19,7 +19,8 @@ bases at the fusion's input, different tracks from run to run).
 
 Cycle at t (001 figure 7):
   predict every component of every global track to t ([55]-[56], IMM mixing);
-  module 63: confirm or dissociate the memberships ([48] <= gamma_max), then add
+  module 63: confirm or dissociate the memberships ([48] <= gamma_max in one live
+    component of the track's mixture: a stated deviation), then add
     free elementary tracks of non-contributing bases, including to tracks in pure
     prediction (resolution loop);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
@@ -91,7 +92,7 @@ from common.crossing import CrossingManager, CrossingParams
 from common.decorrelation import Decorrelator
 from common.elementary import ElementaryParams
 from common.gating import chi2_gate
-from common.global_assoc import (YR, ETrackSet, distance, gated_band_pairs, gated_pairs,
+from common.global_assoc import (YR, ETrackSet, distance, gated_component_pairs, gated_pairs,
                                  projections, resolve)
 from common.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.localisation import Constraints, linearised_position
@@ -241,11 +242,10 @@ class GlobalFusion:
         tab = self.table
         live = tab.active_indices()
         x, P, xm, Pm, c = self._predict(t, live)
-        bands = global_mixture.band_moments(c, xm, Pm, self.A)
-        row = self._confirm(live, bands, E, reported)
+        row = self._confirm(live, (c, xm, Pm), E, reported)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
-        self._extend(live, bands, E, reported, free, row)
+        self._extend(live, (c, xm, Pm), E, reported, free, row)
         new, used = self._initialise(t, E, reported, free)
         if new.size:
             grow = tab.capacity - x.shape[0]
@@ -256,8 +256,7 @@ class GlobalFusion:
             xm[new], Pm[new], c[new] = tab.xm[new], tab.Pm[new], tab.mu[new]
             for k in range(used.shape[1]):
                 row[new, E.base[used[:, k]]] = used[:, k]
-            bands = global_mixture.band_moments(c, xm, Pm, self.A)
-            self._extend(new, bands, E, reported, free, row)
+            self._extend(new, (c, xm, Pm), E, reported, free, row)
         self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
         return self._manage(t, E, row)
 
@@ -274,12 +273,12 @@ class GlobalFusion:
             x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
         return x, P, xm, Pm, c
 
-    def _confirm(self, live: np.ndarray, bands: tuple[np.ndarray, np.ndarray, np.ndarray],
+    def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
                  E: ETrackSet, reported: np.ndarray) -> np.ndarray:
         """Module 63 task 1: row of E of every membership (cap, B) after dissociating
-        members that left or fail the gate [48] in every live altitude band (`bands`:
-        band_moments of the predicted mixture; see global_assoc.gated_band_pairs);
-        -1 where none or base not reported."""
+        members that left or fail the gate [48] in every live component of the
+        predicted mixture (weights, means, covariances; global_assoc.
+        gated_component_pairs says why); -1 where none or base not reported."""
         tab = self.table
         B = len(self.base_ids)
         row = np.full((tab.capacity, B), -1, dtype=np.intp)
@@ -290,11 +289,11 @@ class GlobalFusion:
         k = b * (1 << 40) + tab.member[s, b]
         r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
         ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
-        mass, xb, Pb = bands
+        w, xc, Pc = mixture
         for bb in np.unique(b[ok]):
             sel = np.flatnonzero(ok & (b == bb))
-            n, a = np.nonzero(mass[s[sel]] > 0)  # live bands of these memberships
-            y_pred, GPG = projections(xb[s[sel][n], a], Pb[s[sel][n], a], self.tx[bb], self.rx[bb])
+            n, a = np.nonzero(w[s[sel]] > 0)  # live components of these memberships
+            y_pred, GPG = projections(xc[s[sel][n], a], Pc[s[sel][n], a], self.tx[bb], self.rx[bb])
             gam = distance(y_pred, GPG, E.y[r[sel][n]], E.R[r[sel][n]])  # [48]
             best = np.full(sel.size, np.inf)
             np.minimum.at(best, n, gam)
@@ -303,17 +302,17 @@ class GlobalFusion:
         row[s[ok], b[ok]] = r[ok]
         return row
 
-    def _extend(self, slots: np.ndarray, bands: tuple[np.ndarray, np.ndarray, np.ndarray],
+    def _extend(self, slots: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
                 E: ETrackSet, reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
         """Module 63 tasks 2-3: free elementary tracks of base b to the tracks of
-        `slots` that do not contain b, by the resolution loop (gate [48] per altitude
-        band: global_assoc.gated_band_pairs)."""
+        `slots` that do not contain b, by the resolution loop (gate [48] per mixture
+        component: global_assoc.gated_component_pairs)."""
         tab = self.table
         for b in np.flatnonzero(reported):
             tracks = slots[~tab.has[slots, b]]
             ets = np.flatnonzero(free & (E.base == b))
-            i, m, g = gated_band_pairs(*bands, tracks, ets, E, self.tx[b], self.rx[b],
-                                       self.az_gate, self.gamma_max)
+            i, m, g = gated_component_pairs(*mixture, tracks, ets, E, self.tx[b], self.rx[b],
+                                            self.az_gate, self.gamma_max)
             ti, mi = resolve(i, m, g)
             tab.has[ti, b] = True
             tab.member[ti, b] = E.id[mi]

@@ -1,5 +1,5 @@
 """Tests of module 63 (common.global_assoc): g [47] Jacobian, distance [48], the
-per-altitude-band gate, the two-best-candidates resolution loop."""
+per-component gate, the two-best-candidates resolution loop."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from common.bistatic import project, project_jacobian
-from common.global_assoc import (ETrackSet, distance, gated_band_pairs, gated_pairs,
+from common.global_assoc import (ETrackSet, distance, gated_component_pairs, gated_pairs,
                                  projections, resolve)
 
 TX = np.array([-35000.0, 20000.0, 300.0])
@@ -52,7 +52,7 @@ def _etracks(y: np.ndarray, R: np.ndarray) -> ETrackSet:
                      zeros, y, R, ones)
 
 
-def test_band_gate_passes_when_one_live_band_passes() -> None:
+def test_component_gate_passes_when_one_live_component_passes() -> None:
     """A high, close target (truth z 11.1 km) held by two altitude bands, 3.8 km (mass
     0.99) and 11 km (0.01): its elementary track fails [48] against the mixture's
     moments (mean z 3.9 km) but passes against the 11 km band; a dead band (mass 0)
@@ -75,14 +75,14 @@ def test_band_gate_passes_when_one_live_band_passes() -> None:
     i, m, g = gated_pairs(mean, P_mix[None], np.array([0]), np.array([0]), E, TX, RX, np.pi,
                           gamma_max)
     assert i.size == 0  # the mixture's single Gaussian rejects it
-    i, m, g = gated_band_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX, np.pi,
-                               gamma_max)
+    i, m, g = gated_component_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX,
+                                    np.pi, gamma_max)
     y2, S2 = projections(xb[0, 1:2], Pb[0, 1:2], TX, RX)
     assert (i.tolist(), m.tolist()) == ([0], [0])
     assert g[0] == pytest.approx(distance(y2, S2, y_true, R)[0])
     mass[0, 1] = 0.0  # the 11 km band pruned: nothing left to pass
-    assert gated_band_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX, np.pi,
-                            gamma_max)[0].size == 0
+    assert gated_component_pairs(mass, xb, Pb, np.array([0]), np.array([0]), E, TX, RX, np.pi,
+                                 gamma_max)[0].size == 0
 
 
 def test_resolution_loop_two_candidates() -> None:
