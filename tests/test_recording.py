@@ -9,12 +9,15 @@ from pathlib import Path
 import msgpack
 import numpy as np
 import pytest
+import zenoh
 
 from common import protocol
+from common.bus import stamp
 from common.cli import COMMANDS
 from common.config import load
 from common.deployment import ChildSpec, plan
 from common.recording import Record, RecordReader, RecordWriter, RecordingError
+from services.record.main import Writer
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 TWO_TARGETS = str(SCENARIOS / "two_targets.toml")
@@ -214,3 +217,19 @@ def test_replay_then_record_again_gives_the_same_file_content(tmp_path: Path) ->
     assert len(a) == SCANS * (3 + 1) + 1
     assert a[-1].key == f"{ROOT}/sim/status"
     assert [(r.key, r.payload) for r in a] == [(r.key, r.payload) for r in b]
+
+
+def test_recorder_counts_the_samples_that_never_arrived() -> None:
+    """pfusion record writes the wanted samples and counts, from their stamps, those
+    that never arrived (per key); a bad stamp is logged and its sample still written."""
+    f = io.BytesIO()
+    w = Writer(RecordWriter(f, ROOT, 0.0), [zenoh.KeyExpr(f"{ROOT}/radar/plots/**")], t0=100.0)
+    key, other = f"{ROOT}/radar/plots/b1/c1", f"{ROOT}/radar/fused/b1"
+    for k, (n, t) in enumerate([(0, 100.1), (1, 100.2), (4, 100.3), (5, 100.4)]):
+        w.take(t, key, bytes([k]), stamp("sensor", n))
+    w.take(100.5, other, b"x", stamp("fuser", 9))  # not wanted: neither written nor checked
+    w.take(100.6, key, b"y", b"\x93bad")
+    assert dict(w.losses.missed) == {key: 2}
+    _, recs = read_all(f.getvalue())
+    assert [(k, p) for k, _, p in recs] == [(key, bytes([0])), (key, bytes([1])), (key, bytes([2])),
+                                           (key, bytes([3])), (key, b"y")]
