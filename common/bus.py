@@ -113,7 +113,6 @@ class Publisher:
         self._n += 1
 
 
-
 def stamp(source: str, n: int) -> bytes:
     """The attachment of a sample: msgpack [source, n]."""
     return msgpack.packb([source, n])
@@ -139,8 +138,11 @@ class LossCount:
         self.missed: Counter[str] = Counter()
         self._sequence = SequenceCheck()
 
-    def check(self, key: str, attachment: bytes) -> None:
-        """Account for one received sample's stamp (ValueError if it is not a stamp)."""
+    def check(self, key: str, attachment: bytes | None) -> None:
+        """Account for one received sample's stamp: nothing if it has none (a tool of
+        the user's), ValueError if it is not a stamp."""
+        if attachment is None:
+            return
         source, n = read_stamp(attachment)
         missed = self._sequence.observe(key, source, n)
         if missed:
@@ -149,6 +151,12 @@ class LossCount:
             if before == 0 or before // LOG_EVERY != self.missed[key] // LOG_EVERY:
                 self.log.error("missed %d sample(s) on %s before stamp %d of %s (%d so far)",
                                missed, key, n, source, self.missed[key])
+
+
+def attachment_of(sample: zenoh.Sample) -> bytes | None:
+    """A received sample's attachment as bytes (None without one)."""
+    att = sample.attachment
+    return None if att is None else att.to_bytes()
 
 
 @dataclass(frozen=True)
@@ -172,9 +180,8 @@ class Inbox:
         self._q: queue.SimpleQueue[Envelope] = queue.SimpleQueue()
 
     def on_sample(self, sample: zenoh.Sample) -> None:
-        att = sample.attachment
         self._q.put(Envelope(str(sample.key_expr), sample.payload.to_bytes(),
-                             attachment=None if att is None else att.to_bytes()))
+                             attachment=attachment_of(sample)))
 
     def on_query(self, query: zenoh.Query) -> None:
         self._q.put(Envelope(str(query.key_expr), b"", query))

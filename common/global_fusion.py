@@ -92,8 +92,8 @@ from common.crossing import CrossingManager, CrossingParams
 from common.decorrelation import Decorrelator
 from common.elementary import ElementaryParams
 from common.gating import chi2_gate
-from common.global_assoc import (YR, ETrackSet, distance, gated_component_pairs, gated_pairs,
-                                 projections, resolve)
+from common.global_assoc import (YR, ETrackSet, component_gamma, gated_component_pairs,
+                                 gated_pairs, resolve)
 from common.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.localisation import Constraints, linearised_position
 from common.track_table import STATUS_NAME, Status, TrackTable
@@ -289,15 +289,11 @@ class GlobalFusion:
         k = b * (1 << 40) + tab.member[s, b]
         r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
         ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
-        w, xc, Pc = mixture
         for bb in np.unique(b[ok]):
             sel = np.flatnonzero(ok & (b == bb))
-            n, a = np.nonzero(w[s[sel]] > 0)  # live components of these memberships
-            y_pred, GPG = projections(xc[s[sel][n], a], Pc[s[sel][n], a], self.tx[bb], self.rx[bb])
-            gam = distance(y_pred, GPG, E.y[r[sel][n]], E.R[r[sel][n]])  # [48]
-            best = np.full(sel.size, np.inf)
-            np.minimum.at(best, n, gam)
-            ok[sel] = best <= self.gamma_max
+            gam = component_gamma(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
+                                  self.tx[bb], self.rx[bb])  # [48]
+            ok[sel] = gam <= self.gamma_max
         tab.has[s[~ok], b[~ok]] = False  # dissociation
         row[s[ok], b[ok]] = r[ok]
         return row

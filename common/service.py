@@ -131,11 +131,10 @@ class Service:
             env.query.drop()
             return
         self.counters["in"] += 1
-        if env.attachment is not None:
-            try:
-                self.losses.check(env.key, env.attachment)
-            except ValueError as e:  # the sample itself is still handled
-                self.reject("attachment", str(e), env.key)
+        try:
+            self.losses.check(env.key, env.attachment)
+        except ValueError as e:  # the sample itself is still handled
+            self.reject("attachment", str(e), env.key)
         for route, handler in self._routes:
             if route.intersects(ke):
                 self._guard(env.key, lambda: handler(env.key, env.payload))

@@ -124,8 +124,7 @@ class Deployment:
         """Decode everything received so far into ``messages`` and count the samples
         that never arrived in ``losses`` (raises on invalid data)."""
         while (env := self.inbox.get(0.0)) is not None:
-            if env.attachment is not None:
-                self.losses.check(env.key, env.attachment)
+            self.losses.check(env.key, env.attachment)
             kind = kind_of(env.key, ROOT)
             msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
             self.messages.append((env.key, msg))

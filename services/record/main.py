@@ -19,7 +19,7 @@ import zenoh
 
 from common import protocol
 from common.cli import add_common, load_config
-from common.bus import LossCount, open_session, stop_on_signals
+from common.bus import LossCount, attachment_of, open_session, stop_on_signals
 from common.recording import RecordWriter
 
 log = logging.getLogger("record")
@@ -42,9 +42,8 @@ class Stamped:
         self.q: queue.SimpleQueue[tuple[float, str, bytes, bytes | None]] = queue.SimpleQueue()
 
     def on_sample(self, sample: zenoh.Sample) -> None:
-        att = sample.attachment
         self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes(),
-                    None if att is None else att.to_bytes()))
+                    attachment_of(sample)))
 
 
 class Writer:
@@ -59,11 +58,10 @@ class Writer:
     def take(self, stamp: float, key: str, payload: bytes, attachment: bytes | None) -> None:
         if not any(w.intersects(zenoh.KeyExpr(key)) for w in self.wanted):
             return
-        if attachment is not None:
-            try:
-                self.losses.check(key, attachment)
-            except ValueError as e:
-                log.error("%s: %s", key, e)
+        try:
+            self.losses.check(key, attachment)
+        except ValueError as e:
+            log.error("%s: %s", key, e)
         self.last = max(self.last, stamp - self.t0)
         self.writer.write(key, self.last, payload)
 
