@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from common import gating, kalman, motion
-from common.assignment import gnn, nearest_neighbour
+from common.core import gating, kalman, motion
+from common.core.assignment import gnn, nearest_neighbour
 
 H = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11]
 R = np.diag([150.0**2, 2.0**2, np.radians(1.0) ** 2])

@@ -12,7 +12,7 @@ publishes K seeded runs for both sensors on one router; the copies draw independ
 noise (the simulator seeds each key separately), from the same distribution. One
 tracker process per sensor (and one channel plotter per radar base). Radar cases keep
 base b1 only: crossing.toml's targets cross in b1 and are kilometres apart in b2, b3.
-Each tracker cycle is scored against the truth by `common.crossing_eval` per run.
+Each tracker cycle is scored against the truth by `common.evaluation.crossing_eval` per run.
 """
 
 from __future__ import annotations
@@ -31,10 +31,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from common.bistatic import azimuth, bistatic_range
-from common.config import load
-from common.crossing_eval import EvalParams, Frame, Summary, score_run, summarise
-from common.simulator import load_scenario
+from common.radar.bistatic import azimuth, bistatic_range
+from common.deploy.config import load
+from common.evaluation.crossing_eval import EvalParams, Frame, Summary, score_run, summarise
+from common.sim.simulator import load_scenario
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIOS = REPO / "scenarios"

@@ -1,11 +1,11 @@
-"""Monte Carlo consistency of the global tracks, in one process (common.radar_chain).
+"""Monte Carlo consistency of the global tracks, in one process (common.wire.radar_chain).
 
 Run: .venv/bin/python benchmarks/global_consistency.py [scenario ...] [--runs N]
 
 Per scenario (default two_targets and crossing) and seeds 1..N: per run, switches,
 breaks, per target the mean position NEES and the RMSE against the PCRLB after the
 settling time; then, over the runs, the average NEES per time against its 95 %
-chi-square interval (common.pcrlb.monte_carlo_nees: Bar-Shalom, Li, Kirubarajan
+chi-square interval (common.evaluation.pcrlb.monte_carlo_nees: Bar-Shalom, Li, Kirubarajan
 5.4.2), per target and in all, and the pooled RMSE / PCRLB. The same numbers as the
 multi-process test (tests/test_global_integration.py), which checks that this chain
 reproduces the processes.
@@ -19,12 +19,12 @@ from pathlib import Path
 
 import numpy as np
 
-from common.config import load, section
-from common.global_fusion import FusionParams
-from common.pcrlb import Evaluation, monte_carlo_nees, score_targets
-from common.radar_chain import RadarChain
-from common.sim_scenario import load_scenario
-from common.simulator import run_scenario
+from common.deploy.config import load, section
+from common.radar.global_fusion import FusionParams
+from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
+from common.wire.radar_chain import RadarChain
+from common.sim.scenario import load_scenario
+from common.sim.simulator import run_scenario
 from services.evaluate.main import base_information, truth_state
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

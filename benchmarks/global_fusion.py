@@ -24,13 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from common.bistatic import POS, project
-from common.config import load, section
-from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.global_fusion import FusionParams, GlobalFusion
-from common.plot_fusion import Plots
-from common.radar_chain import etracks_message
-from common.pcrlb import Evaluation, score_targets
+from common.radar.bistatic import POS, project
+from common.deploy.config import load, section
+from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.plot_fusion import Plots
+from common.wire.radar_chain import etracks_message
+from common.evaluation.pcrlb import Evaluation, score_targets
 
 DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"
 SIG = np.array([60.0, 0.7, np.radians(0.5)])

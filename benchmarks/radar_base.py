@@ -30,16 +30,16 @@ from pathlib import Path
 
 import numpy as np
 
-from common.bistatic import azimuth, bistatic_range, bistatic_range_rate
-from common.config import RadarBase, load
-from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.gating import chi2_gate
-from common.metrics import gospa
-from common.plot_fusion import PlotFusion, Plots
-from common.sim_radar import radar_plots
-from common.sim_scenario import RadarChannelSim, RadarSim
-from common.simulator import load_scenario, run_scenario
-from common.track_table import Status
+from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate
+from common.deploy.config import RadarBase, load
+from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.core.gating import chi2_gate
+from common.evaluation.metrics import gospa
+from common.radar.plot_fusion import PlotFusion, Plots
+from common.sim.radar import radar_plots
+from common.sim.scenario import RadarChannelSim, RadarSim
+from common.sim.simulator import load_scenario, run_scenario
+from common.core.track_table import Status
 
 REPO = Path(__file__).resolve().parents[1]
 UNITS = np.array([150.0, 2.0, np.radians(1.5)])  # GOSPA units: default channel sigmas

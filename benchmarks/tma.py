@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
-from common.ctma import Bounds, TmaTracker, solve_ctma
+from common.sonar.ctma import Bounds, TmaTracker, solve_ctma
 from core import median_ms  # benchmarks/core.py, beside this script
-from common.tma import solve_tma
+from common.sonar.tma import solve_tma
 
 KN = 1852.0 / 3600.0
 SIG = np.radians(1.5)

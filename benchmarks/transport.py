@@ -1,9 +1,9 @@
-"""Transport benchmark: stamped publishers (``common.bus.Publisher``) against plain
+"""Transport benchmark: stamped publishers (``common.bus.transport.Publisher``) against plain
 Zenoh publishers, through a real ``pfusion router`` child process on loopback.
 
 One client session publishes N samples as fast as BLOCK congestion control lets it;
-another receives them into an :class:`~common.bus.Inbox` and drains it on the main
-thread, checking the stamps (``common.bus.LossCount``) as a service does. Reports
+another receives them into an :class:`~common.bus.transport.Inbox` and drains it on the main
+thread, checking the stamps (``common.bus.transport.LossCount``) as a service does. Reports
 samples per second from the first put to the last sample drained, and the samples
 received and missed.
 
@@ -18,9 +18,9 @@ import time
 
 import zenoh
 
-from common.bus import Inbox, LossCount, Publisher, open_session
-from common.config import ZenohConfig
-from common.procs import start_router
+from common.bus.transport import Inbox, LossCount, Publisher, open_session
+from common.deploy.config import ZenohConfig
+from common.bus.procs import start_router
 
 KEY = "bench/transport/data"
 

@@ -11,7 +11,7 @@ import importlib
 import logging
 import sys
 
-from common.config import ConfigError, Config, ZenohConfig, load
+from common.deploy.config import ConfigError, Config, ZenohConfig, load
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "router": ("services.router.main", "run a Zenoh router (Python, no zenohd needed)"),
@@ -49,7 +49,7 @@ def add_base_service(p: argparse.ArgumentParser) -> None:
 
 def load_config(args: argparse.Namespace) -> Config:
     """The deployment config of ``args`` (every table checked), with --connect applied."""
-    from common.sections import check_all
+    from common.deploy.sections import check_all
 
     cfg = load(args.config) if args.config else _empty_config()
     check_all(cfg)
@@ -60,7 +60,7 @@ def load_config(args: argparse.Namespace) -> Config:
 
 
 def _empty_config() -> Config:
-    from common.config import parse
+    from common.deploy.config import parse
 
     return parse({})
 

@@ -10,13 +10,13 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from common import protocol
-from common.bus import Inbox, LossCount, open_session
+from common.wire import protocol
+from common.bus.transport import Inbox, LossCount, open_session
 from common.cli import COMMANDS
-from common.config import ZenohConfig, load
-from common.deployment import plan
-from common.procs import Child, start_router
-from common.protocol import kind_of
+from common.deploy.config import ZenohConfig, load
+from common.deploy.deployment import plan
+from common.bus.procs import Child, start_router
+from common.wire.protocol import kind_of
 
 ROOT = "pf/v1"
 REPO = Path(__file__).resolve().parents[1]
@@ -63,7 +63,7 @@ class Deployment:
         return child
 
     def start_services(self, config: Path, commands: tuple[str, ...]) -> list[str]:
-        """Start the services of ``config`` that run ``commands`` (common.deployment.plan);
+        """Start the services of ``config`` that run ``commands`` (common.deploy.deployment.plan);
         returns their liveliness names, for ``wait_alive`` and ``simulate``."""
         specs = [s for s in plan(load(config), str(config), COMMANDS) if s.argv[0] in commands]
         for spec in specs:

@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.assignment import gnn, nearest_neighbour
+from common.core.assignment import gnn, nearest_neighbour
 
 INF = np.inf
 

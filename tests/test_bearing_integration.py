@@ -17,8 +17,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from common import protocol
-from common.config import load
+from common.wire import protocol
+from common.deploy.config import load
 from harness import ROOT, SCENARIOS, Deployment
 
 CONFIRM_CYCLES = 8

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.bearing_model import (
+from common.sonar.bearing_model import (
     gate_value,
     linear_array_sigma,
     measurement_matrix,
@@ -18,9 +18,9 @@ from common.bearing_model import (
     quality_increment,
     thresholds,
 )
-from common.bearing_tracker import BearingTracker, TimeOrderError, TrackerParams
-from common.crossing import CrossingParams
-from common.multiline import NEW, MultiLineGrouper
+from common.sonar.bearing_tracker import BearingTracker, TimeOrderError, TrackerParams
+from common.core.crossing import CrossingParams
+from common.sonar.multiline import NEW, MultiLineGrouper
 
 DEG = math.pi / 180.0
 BB = TrackerParams(mode="broadband")

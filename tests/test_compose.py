@@ -13,8 +13,8 @@ import pytest
 import yaml
 
 from common.cli import COMMANDS
-from common.config import load
-from common.deployment import token_name
+from common.deploy.config import load
+from common.deploy.deployment import token_name
 
 REPO = Path(__file__).resolve().parents[1]
 COMPOSE = yaml.safe_load((REPO / "docker-compose.yml").read_text())

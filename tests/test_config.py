@@ -11,7 +11,7 @@ from typing import Literal
 import numpy as np
 import pytest
 
-from common.config import ConfigError, load, parse, section
+from common.deploy.config import ConfigError, load, parse, section
 
 GOOD = """
 [zenoh]

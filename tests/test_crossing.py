@@ -1,4 +1,4 @@
-"""Tests of common.crossing (seed 004 eq. 12, eq. 13, sup-norm test, modes, duration)."""
+"""Tests of common.core.crossing (seed 004 eq. 12, eq. 13, sup-norm test, modes, duration)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.crossing import (
+from common.core.crossing import (
     CUTOFF_RADIUS,
     DENSITY_CUTOFF,
     CrossingManager,

@@ -1,4 +1,4 @@
-"""Unit tests of common.crossing_eval on hand-made crossing sequences (1-D bearings in
+"""Unit tests of common.evaluation.crossing_eval on hand-made crossing sequences (1-D bearings in
 degree units, so sigma = 1 and thresholds read in degrees, and a 2-D radar case)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from common.crossing_eval import (
+from common.evaluation.crossing_eval import (
     EvalParams,
     Frame,
     RunScore,

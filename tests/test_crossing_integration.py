@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from benchmarks.crossing_swaps import CASES, SCENARIOS, Case, run_case
-from common.config import load
-from common.simulator import load_scenario, run_scenario
+from common.deploy.config import load
+from common.sim.simulator import load_scenario, run_scenario
 from services.simulator.main import repeated
 
 RUNS = 50

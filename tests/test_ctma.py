@@ -1,12 +1,12 @@
-"""Tests for common.ctma (seed 003): CTMA, residual factor, edge checks, correction, convergence."""
+"""Tests for common.sonar.ctma (seed 003): CTMA, residual factor, edge checks, correction, convergence."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from common.crlb import position_rms_bound
-from common.ctma import (
+from common.sonar.crlb import position_rms_bound
+from common.sonar.ctma import (
     MINIMAL_BOUNDS,
     Bounds,
     ConvergenceDetector,
@@ -21,7 +21,7 @@ from common.ctma import (
     solve_ctma,
     state_bounds,
 )
-from common.tma import solve_tma
+from common.sonar.tma import solve_tma
 from tests.test_tma import BETA, BETA2, KN, OWN, SIG, TM, T, pos_at, true_bearings
 
 D = np.radians

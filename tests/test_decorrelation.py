@@ -1,13 +1,13 @@
-"""Equivalent measurements (common.decorrelation) recovered from the reports of the real
-elementary tracker (common.elementary) equal the fused plots it used."""
+"""Equivalent measurements (common.radar.decorrelation) recovered from the reports of the real
+elementary tracker (common.radar.elementary) equal the fused plots it used."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from common.decorrelation import Decorrelator
-from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.plot_fusion import Plots
+from common.radar.decorrelation import Decorrelator
+from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.plot_fusion import Plots
 
 SIG = np.array([150.0, 1.5, np.radians(1.0)])
 

@@ -1,6 +1,6 @@
 """``pfusion evaluate`` against the real chain (router, simulator, plotters, elementary
 trackers, global fusion, evaluate: each its own process): the table it prints must
-match a direct computation (common.pcrlb / common.metrics) on the gtracks and truth
+match a direct computation (common.evaluation.pcrlb / common.evaluation.metrics) on the gtracks and truth
 the test collected itself."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from common.config import load, section
-from common.global_fusion import FusionParams
-from common.pcrlb import Evaluation, score_targets
-from common.procs import Child
+from common.deploy.config import load, section
+from common.radar.global_fusion import FusionParams
+from common.evaluation.pcrlb import Evaluation, score_targets
+from common.bus.procs import Child
 from services.evaluate.main import base_information
 from tests.harness import SCENARIOS, Deployment
 

@@ -4,8 +4,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common import gating
-from common.angles import wrap_2pi, wrap_pi
+from common.core import gating
+from common.core.angles import wrap_2pi, wrap_pi
 
 angles = st.floats(min_value=-1e4, max_value=1e4, allow_nan=False)
 

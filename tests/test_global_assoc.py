@@ -1,4 +1,4 @@
-"""Tests of module 63 (common.global_assoc): g [47] Jacobian, distance [48], the
+"""Tests of module 63 (common.radar.global_assoc): g [47] Jacobian, distance [48], the
 per-component gate, the two-best-candidates resolution loop."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.bistatic import project, project_jacobian
-from common.global_assoc import (ETrackSet, distance, gated_component_pairs, gated_pairs,
+from common.radar.bistatic import project, project_jacobian
+from common.radar.global_assoc import (ETrackSet, distance, gated_component_pairs, gated_pairs,
                                  projections, resolve)
 
 TX = np.array([-35000.0, 20000.0, 300.0])

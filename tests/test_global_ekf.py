@@ -1,19 +1,19 @@
-"""Tests of module 65 (common.global_ekf) and of the cycle / management of module 61
-(common.global_fusion) on elementary tracks synthesised from truth."""
+"""Tests of module 65 (common.radar.global_ekf) and of the cycle / management of module 61
+(common.radar.global_fusion) on elementary tracks synthesised from truth."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from common import kalman
-from common.bistatic import POS, project
-from common.config import RadarBase
-from common.global_ekf import fused_update, observation
-from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.global_fusion import FusionParams, GlobalFusion
-from common.plot_fusion import Plots
-from common.track_table import STATUS_NAME, Status
+from common.core import kalman
+from common.radar.bistatic import POS, project
+from common.deploy.config import RadarBase
+from common.radar.global_ekf import fused_update, observation
+from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.plot_fusion import Plots
+from common.core.track_table import STATUS_NAME, Status
 
 
 RX = np.array([0.0, 0.0, 30.0])

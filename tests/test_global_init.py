@@ -1,20 +1,20 @@
-"""Tests of module 62 (common.global_init) and the block localisation (common.localisation)."""
+"""Tests of module 62 (common.radar.global_init) and the block localisation (common.radar.localisation)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from common.angles import wrap_pi
-from common.bistatic import azimuth, bistatic_range, bistatic_range_rate, ellipsoid_point
-from common.global_init import (
+from common.core.angles import wrap_pi
+from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate, ellipsoid_point
+from common.radar.global_init import (
     azimuth_pairs,
     coarse_intersection,
     initial_state,
     pair_velocity,
     select,
 )
-from common.localisation import Constraints, block_localise, gauss_newton
+from common.radar.localisation import Constraints, block_localise, gauss_newton
 
 RX = np.array([0.0, 0.0, 0.0])
 TX = np.array([[-35000.0, 20000.0, 0.0], [45000.0, 10000.0, 0.0], [5000.0, -52000.0, 0.0]])

@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from common.bistatic import POS
-from common.config import load, section
-from common.global_fusion import FusionParams
-from common.radar_chain import RadarChain
-from common.sim_scenario import load_scenario
-from common.simulator import run_scenario
-from common.pcrlb import Evaluation, monte_carlo_nees, score_targets
+from common.radar.bistatic import POS
+from common.deploy.config import load, section
+from common.radar.global_fusion import FusionParams
+from common.wire.radar_chain import RadarChain
+from common.sim.scenario import load_scenario
+from common.sim.simulator import run_scenario
+from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from services.evaluate.main import base_information
 from tests.harness import SCENARIOS, Deployment
 
@@ -65,7 +65,7 @@ def split_runs(msgs: list[dict], period: float) -> list[list[dict]]:
 def first_seen_by_two(etracks: dict[str, list[dict]], truth: list[dict], cfg) -> dict[int, float]:
     """Per truth id, the first time at which two bases hold a confirmed elementary track
     within 1 km of its bistatic range (the time the global chain can start it)."""
-    from common.bistatic import bistatic_range
+    from common.radar.bistatic import bistatic_range
 
     seen: dict[int, dict[str, float]] = {}
     by_t = {m["t"]: m for m in truth}
@@ -140,7 +140,7 @@ def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
 
 
 def test_in_process_chain_reproduces_the_processes(chain: MonteCarlo) -> None:
-    """common.radar_chain on seed 1 gives the global tracks the processes published in
+    """common.wire.radar_chain on seed 1 gives the global tracks the processes published in
     run 0 (numbers equal, states to 1e-9): Monte Carlo studies in one process are
     studies of the deployed chain."""
     cfg = load(chain.scenario)

@@ -1,5 +1,5 @@
-"""Tests of the altitude bands x IMM models state of global tracks (common.global_mixture,
-common.global_init.altitude_bands) and of modules 62-63 with four bases."""
+"""Tests of the altitude bands x IMM models state of global tracks (common.radar.global_mixture,
+common.radar.global_init.altitude_bands) and of modules 62-63 with four bases."""
 
 from __future__ import annotations
 
@@ -9,17 +9,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from common import global_mixture as gm
-from common import imm
-from common.bistatic import POS, bistatic_range, project
-from common.config import load
-from common.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.global_fusion import FusionParams, GlobalFusion
-from common.global_init import InitParams, altitude_bands
-from common.plot_fusion import Plots
-from common.radar_chain import RadarChain, etracks_message
-from common.sim_scenario import load_scenario
-from common.simulator import run_scenario
+from common.radar import global_mixture as gm
+from common.core import imm
+from common.radar.bistatic import POS, bistatic_range, project
+from common.deploy.config import load
+from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.global_init import InitParams, altitude_bands
+from common.radar.plot_fusion import Plots
+from common.wire.radar_chain import RadarChain, etracks_message
+from common.sim.scenario import load_scenario
+from common.sim.simulator import run_scenario
 
 A, M = 3, 2
 DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"

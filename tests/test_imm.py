@@ -1,4 +1,4 @@
-"""Unit tests of the IMM steps (common.imm; Bar-Shalom, Li, Kirubarajan 11.6.6)."""
+"""Unit tests of the IMM steps (common.core.imm; Bar-Shalom, Li, Kirubarajan 11.6.6)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.linalg import expm
 from scipy.stats import multivariate_normal
 
-from common import imm
+from common.core import imm
 
 
 @pytest.mark.parametrize("tau", [[60.0, 10.0], [30.0, 5.0, 12.0]])

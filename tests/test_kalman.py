@@ -3,7 +3,7 @@
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
-from common import kalman, motion
+from common.core import kalman, motion
 
 H5 = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11]
 

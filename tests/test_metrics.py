@@ -1,4 +1,4 @@
-"""Tests of common.metrics on hand-computed cases."""
+"""Tests of common.evaluation.metrics on hand-computed cases."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from common.metrics import (
+from common.evaluation.metrics import (
     MetricsAccumulator,
     SwitchCounts,
     count_switches,

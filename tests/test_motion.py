@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from common import motion
+from common.core import motion
 
 
 def test_bistatic_F_001_19():

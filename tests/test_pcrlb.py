@@ -1,4 +1,4 @@
-"""Tests of common.pcrlb: the recursive information matrix against the equivalent
+"""Tests of common.evaluation.pcrlb: the recursive information matrix against the equivalent
 EKF covariance recursion, channel information, NEES helpers."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common import kalman
-from common.bistatic import POS, project_jacobian
-from common.motion import cv_F, cv_Q
-from common.pcrlb import (
+from common.core import kalman
+from common.radar.bistatic import POS, project_jacobian
+from common.core.motion import cv_F, cv_Q
+from common.evaluation.pcrlb import (
     Evaluation,
     channel_information,
     mean_nees_interval,

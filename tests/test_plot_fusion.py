@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.plot_fusion import (
+from common.radar.plot_fusion import (
     LateInput, PlotFusion, Plots, accept, aggregate, fuse, fuse_scan, overlap_pairs,
     window_pairs,
 )

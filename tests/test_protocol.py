@@ -10,8 +10,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from common import protocol
-from common.protocol import DecodeError, decode, encode
+from common.wire import protocol
+from common.wire.protocol import DecodeError, decode, encode
 
 
 def plots_msg(n: int = 3) -> dict:

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from common import protocol
-from common.angles import wrap_pi
-from common.bistatic import azimuth, bistatic_range
-from common.bus import stamp
-from common.config import load
+from common.wire import protocol
+from common.core.angles import wrap_pi
+from common.radar.bistatic import azimuth, bistatic_range
+from common.bus.transport import stamp
+from common.deploy.config import load
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 SCN = SCENARIOS / "two_targets.toml"

@@ -13,13 +13,13 @@ from pathlib import Path
 from typing import Any
 
 
-from common import protocol
-from common.bus import Inbox, free_port, open_session, wait_port
+from common.wire import protocol
+from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS
-from common.config import ZenohConfig, load, parse
-from common.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
-from common.procs import pfusion_argv
-from common.protocol import kind_of
+from common.deploy.config import ZenohConfig, load, parse
+from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
+from common.bus.procs import pfusion_argv
+from common.wire.protocol import kind_of
 
 REPO = Path(__file__).resolve().parents[1]
 TWO_TARGETS = str(REPO / "scenarios" / "two_targets.toml")

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from common.config import ConfigError, load, parse
-from common.sections import SECTIONS, _describe, _meanings, check_all, markdown
+from common.deploy.config import ConfigError, load, parse
+from common.deploy.sections import SECTIONS, _describe, _meanings, check_all, markdown
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -1,5 +1,5 @@
-"""Publisher stamps and the count of samples that never arrived (common.sequence,
-common.bus.stamp / read_stamp)."""
+"""Publisher stamps and the count of samples that never arrived (common.core.sequence,
+common.bus.transport.stamp / read_stamp)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from common.bus import read_stamp, stamp
-from common.sequence import SequenceCheck
+from common.bus.transport import read_stamp, stamp
+from common.core.sequence import SequenceCheck
 
 
 @given(st.text(max_size=40), st.integers(min_value=0, max_value=2**63 - 1))

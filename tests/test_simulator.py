@@ -1,4 +1,4 @@
-"""Tests of the scenario simulator (common.sim_scenario / sim_radar / sim_sonar / simulator)."""
+"""Tests of the scenario simulator (common.sim.scenario / sim_radar / sim_sonar / simulator)."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from common import protocol
-from common.bistatic import azimuth, bistatic_range, bistatic_range_rate
-from common.config import RadarBase, SonarArray, load
-from common.sim_scenario import Mover, SonarArraySim
-from common.sim_sonar import bearing_sigma
-from common.simulator import load_scenario, run_scenario
+from common.wire import protocol
+from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate
+from common.deploy.config import RadarBase, SonarArray, load
+from common.sim.scenario import Mover, SonarArraySim
+from common.sim.sonar import bearing_sigma
+from common.sim.simulator import load_scenario, run_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 BASES = [

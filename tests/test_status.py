@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 
-from common.procs import pfusion_argv
+from common.bus.procs import pfusion_argv
 from services.status.main import table
 from tests.harness import ROOT, SCENARIOS, Deployment
 

@@ -1,4 +1,4 @@
-"""Tests for common.tma (seed 002) and common.crlb.
+"""Tests for common.sonar.tma (seed 002) and common.sonar.crlb.
 
 Scenario of the literature (Nardone, Lindgren & Gong 1984): own ship 5 kn, course 140 deg;
 the course is set to 110, 80, 50, 20 deg at samples 13, 14, 15, 16 (1-based, one
@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.crlb import crlb, fisher_information, position_rms_bound
-from common.tma import (
+from common.sonar.crlb import crlb, fisher_information, position_rms_bound
+from common.sonar.tma import (
     Support,
     bearing_model,
     detect_manoeuvre,

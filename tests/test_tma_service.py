@@ -1,4 +1,4 @@
-"""TMA service (002, 003): (a) the pure glue common.tma_manager, (b) the bounds message
+"""TMA service (002, 003): (a) the pure glue common.sonar.tma_manager, (b) the bounds message
 and the [sonar.tma] configuration, (c) simulator -> router -> bearing tracker -> tma as
 real processes on scenarios/sonar_tma.toml.
 
@@ -21,10 +21,10 @@ import msgpack
 import numpy as np
 import pytest
 
-from common import protocol
-from common.config import ConfigError, parse
-from common.ctma import MINIMAL_BOUNDS, TWO_PI, Bounds
-from common.tma_manager import TmaInputError, TmaManager, TmaParams, make_bounds, thin
+from common.wire import protocol
+from common.deploy.config import ConfigError, parse
+from common.sonar.ctma import MINIMAL_BOUNDS, TWO_PI, Bounds
+from common.sonar.tma_manager import TmaInputError, TmaManager, TmaParams, make_bounds, thin
 from harness import ROOT, SCENARIOS, Deployment
 from services.tma.main import tma_config
 

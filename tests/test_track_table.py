@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from common.track_table import Status, TrackTable
+from common.core.track_table import Status, TrackTable
 
 
 def test_numbers_recycled_smallest_first():

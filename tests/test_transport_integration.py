@@ -7,8 +7,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from common.config import load
-from common.procs import start_router
+from common.deploy.config import load
+from common.bus.procs import start_router
 from harness import ROOT, SCENARIOS, Deployment
 
 SCANS = 1000
@@ -34,7 +34,7 @@ def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None
         f"lost: {gaps}, truth missing at t={missing_truth}, stamps say {dict(d.losses.missed)}")
     assert not d.losses.missed
     # CI once lost the last 12-17 truth samples: the simulator undeclared its publishers
-    # before closing its session (see common.bus.Publisher); the times above name them
+    # before closing its session (see common.bus.transport.Publisher); the times above name them
     plot_keys = [k for k in seqs if "/radar/plots/" in k]
     cfg = load(SCENARIOS / "dense.toml")
     assert len(cfg.bases) == 4

@@ -14,12 +14,12 @@ from typing import Any
 
 import zenoh
 
-from common import protocol
-from common.bearing_tracker import BearingTracker, Cycle, TimeOrderError, TrackerParams
+from common.wire import protocol
+from common.sonar.bearing_tracker import BearingTracker, Cycle, TimeOrderError, TrackerParams
 from common.cli import add_common, load_config
-from common.config import section
-from common.crossing import CrossingParams
-from common.service import Rejected, Service
+from common.deploy.config import section
+from common.core.crossing import CrossingParams
+from common.bus.service import Rejected, Service
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,7 +1,7 @@
 """``pfusion channel-plotter``: channel plots of one base -> fused plots (001 modules 31-34).
 
 Subscribes radar/plots/<base>/*, publishes radar/fused/<base> once per scan (also when
-empty). The algorithm is common.plot_fusion; this module only decodes, validates and
+empty). The algorithm is common.radar.plot_fusion; this module only decodes, validates and
 publishes.
 """
 
@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import argparse
 
-from common import protocol
+from common.wire import protocol
 from common.cli import add_base_service, load_config
-from common.config import section
-from common.plot_fusion import LateInput, PlotFusion, PlotterParams
-from common.radar_chain import fused_message, plots_of
-from common.service import Rejected, Service
+from common.deploy.config import section
+from common.radar.plot_fusion import LateInput, PlotFusion, PlotterParams
+from common.wire.radar_chain import fused_message, plots_of
+from common.bus.service import Rejected, Service
 
 
 add_arguments = add_base_service  # --config, --connect, --base

@@ -16,15 +16,15 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from common import protocol
-from common.bus import Inbox, open_session
+from common.wire import protocol
+from common.bus.transport import Inbox, open_session
 from common.cli import COMMANDS, add_common
-from common.config import ZenohConfig, load
-from common.deployment import ChildSpec, plan
-from common.procs import Child, start_router
-from common.simulator import load_scenario
+from common.deploy.config import ZenohConfig, load
+from common.deploy.deployment import ChildSpec, plan
+from common.bus.procs import Child, start_router
+from common.sim.simulator import load_scenario
 from services.demo.report import Collected, radar_table, sonar_table
-from common.protocol import kind_of
+from common.wire.protocol import kind_of
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BAR = 30

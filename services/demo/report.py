@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from common.angles import wrap_pi
-from common.config import Config
-from common.pcrlb import Evaluation
+from common.core.angles import wrap_pi
+from common.deploy.config import Config
+from common.evaluation.pcrlb import Evaluation
 from services.evaluate.main import report, truth_state
 
 Msg = dict[str, Any]

@@ -1,6 +1,6 @@
 """``pfusion evaluate``: score the global tracks against the simulator truth, live and
 at the end: GOSPA (with switching term) and OSPA, track number switches and breaks
-(common.metrics), position RMSE against the PCRLB and NEES (common.pcrlb).
+(common.evaluation.metrics), position RMSE against the PCRLB and NEES (common.evaluation.pcrlb).
 
 Subscribes radar/gtracks, sim/truth/radar and sim/status; pairs tracks and truth by
 message time; only confirmed global tracks are scored. Stops on SIGTERM/SIGINT, or
@@ -19,13 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from common import protocol
+from common.wire import protocol
 from common.cli import add_common, load_config
-from common.config import Config, section
-from common.global_fusion import FusionParams
-from common.pcrlb import Evaluation, channel_information, score_targets
-from common.service import Service
-from common.simulator import load_scenario
+from common.deploy.config import Config, section
+from common.radar.global_fusion import FusionParams
+from common.evaluation.pcrlb import Evaluation, channel_information, score_targets
+from common.bus.service import Service
+from common.sim.simulator import load_scenario
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

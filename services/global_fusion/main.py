@@ -2,7 +2,7 @@
 (001 step 24, modules 61-65; crossing management of 004).
 
 Subscribes radar/etracks/*, publishes radar/gtracks once per fusion cycle with every
-live global track. The algorithm is common.global_fusion; this module only decodes,
+live global track. The algorithm is common.radar.global_fusion; this module only decodes,
 validates and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
 [radar.fusion_crossing] (CrossingParams); without that table the global tracks use the
 sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
@@ -11,7 +11,7 @@ F [19] / Q [20] noise, needed to recover their equivalent measurements.
 
 Cycle rule: a base that has sent nothing for `max_wait` seconds of wall time (since its
 last message, or since the first message of any base) is stale; the core then runs
-cycles without it (common.global_fusion says why wall time and not message time).
+cycles without it (common.radar.global_fusion says why wall time and not message time).
 """
 
 from __future__ import annotations
@@ -19,12 +19,12 @@ from __future__ import annotations
 import argparse
 import time
 
-from common import protocol
+from common.wire import protocol
 from common.cli import add_common, load_config
-from common.config import ConfigError, section
-from common.global_fusion import FusionParams
-from common.radar_chain import global_fusion
-from common.service import Rejected, Service
+from common.deploy.config import ConfigError, section
+from common.radar.global_fusion import FusionParams
+from common.wire.radar_chain import global_fusion
+from common.bus.service import Rejected, Service
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import argparse
 
-from common.config import load
-from common.sections import check_all, markdown
+from common.deploy.config import load
+from common.deploy.sections import check_all, markdown
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import zenoh
 
-from common import protocol
+from common.wire import protocol
 from common.cli import add_common, load_config
-from common.bus import LossCount, attachment_of, open_session, stop_on_signals
-from common.recording import RecordWriter
+from common.bus.transport import LossCount, attachment_of, open_session, stop_on_signals
+from common.bus.recording import RecordWriter
 
 log = logging.getLogger("record")
 
@@ -48,7 +48,7 @@ class Stamped:
 
 class Writer:
     """Writes the wanted samples and counts the ones that never arrived (their
-    publishers' stamps, ``common.bus.LossCount``)."""
+    publishers' stamps, ``common.bus.transport.LossCount``)."""
 
     def __init__(self, writer: RecordWriter, wanted: list[zenoh.KeyExpr], t0: float) -> None:
         self.writer, self.wanted, self.t0 = writer, wanted, t0

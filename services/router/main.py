@@ -7,7 +7,7 @@ import logging
 
 import zenoh
 
-from common.bus import stop_on_signals, zenoh_config
+from common.bus.transport import stop_on_signals, zenoh_config
 
 log = logging.getLogger("router")
 

@@ -17,12 +17,12 @@ import time
 from collections.abc import Iterable
 from typing import IO
 
-from common.bus import free_port, stop_on_signals, wait_port
+from common.bus.transport import free_port, stop_on_signals, wait_port
 from common.cli import COMMANDS, add_common, load_config
-from common.deployment import (
+from common.deploy.deployment import (
     Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
 )
-from common.procs import pfusion_argv
+from common.bus.procs import pfusion_argv
 
 STOP_TIMEOUT_S = 5.0
 POLL_S = 0.1

@@ -19,12 +19,12 @@ from pathlib import Path
 
 import zenoh
 
-from common import protocol
-from common.bus import Publisher, linger, open_session, stop_on_signals, wait_alive
+from common.wire import protocol
+from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
-from common.config import Config
-from common.sim_scenario import Scenario
-from common.simulator import Message, load_scenario, run_scenario
+from common.deploy.config import Config
+from common.sim.scenario import Scenario
+from common.sim.simulator import Message, load_scenario, run_scenario
 
 log = logging.getLogger("simulate")
 

@@ -10,8 +10,8 @@ from typing import Any
 
 import zenoh
 
-from common import protocol
-from common.bus import Inbox, open_session, stop_on_signals
+from common.wire import protocol
+from common.bus.transport import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 LISTEN_S = 2.5

@@ -16,12 +16,12 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from common import protocol
+from common.wire import protocol
 from common.cli import add_common, load_config
-from common.config import Config, ConfigError, section
-from common.ctma import Bounds, CtmaConfig
-from common.service import Rejected, Service
-from common.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaInputError, TmaManager, TmaParams, make_bounds
+from common.deploy.config import Config, ConfigError, section
+from common.sonar.ctma import Bounds, CtmaConfig
+from common.bus.service import Rejected, Service
+from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaInputError, TmaManager, TmaParams, make_bounds
 
 HISTORY_TIMEOUT_S = 2.0
 SUBTABLES = ("ctma", "bounds")

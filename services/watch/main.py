@@ -6,8 +6,8 @@ import argparse
 import sys
 from typing import Any
 
-from common import protocol
-from common.bus import Inbox, open_session, stop_on_signals
+from common.wire import protocol
+from common.bus.transport import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,0 +1,6 @@
+"""Transport and service plumbing: Zenoh sessions, stamped publishers and bounded
+inboxes (``transport``), the thin service runtime (``service``), recording, and the
+child-process helpers (``procs``). The only package that talks to Zenoh.
+
+May import: every package of ``common`` except ``cli``; never ``services``.
+"""

@@ -1,0 +1,61 @@
+"""Child processes for the demo, ``pfusion run`` and the integration tests: each a
+fresh interpreter started with subprocess (never fork after a Zenoh session is open)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import IO
+
+from common.bus.transport import free_port, wait_port
+
+
+def pfusion_argv(*args: str) -> list[str]:
+    """argv that runs ``pfusion ARGS`` with this interpreter."""
+    return [sys.executable, "-m", "common.cli", *args]
+
+
+class Child:
+    """A ``pfusion`` subcommand in its own process; stderr goes to ``log`` if given."""
+
+    def __init__(self, name: str, *args: str, log: Path | None = None,
+                 stdout: int | IO[bytes] | None = None) -> None:
+        self.name = name
+        self.argv = pfusion_argv(*args)
+        self._log: IO[bytes] | None = open(log, "ab") if log else None
+        self.proc = subprocess.Popen(
+            self.argv, stdout=stdout if stdout is not None else subprocess.DEVNULL,
+            stderr=self._log if self._log else subprocess.DEVNULL,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        )
+
+    def wait(self, timeout: float) -> int:
+        return self.proc.wait(timeout)
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self, timeout: float = 5.0) -> int:
+        """SIGTERM, then SIGKILL after ``timeout``; returns the exit code."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        if self._log:
+            self._log.close()
+        return int(self.proc.returncode)
+
+
+def start_router(log: Path | None = None, port: int | None = None) -> tuple[Child, str]:
+    """A ``pfusion router`` on a free loopback port; returns it and its endpoint."""
+    port = port or free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    child = Child("router", "router", "--listen", endpoint, log=log)
+    wait_port(port)
+    return child, endpoint

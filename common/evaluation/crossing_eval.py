@@ -1,0 +1,173 @@
+"""Per-run scoring of a two-target crossing (seed 004 evaluation): track number swaps,
+lost truths and the published ambiguity flag.
+
+Pure: frames in, counts out. A frame is one tracker cycle with the truths and the live
+tracks expressed in the same measurement space (sonar: [bearing]; radar: [r_b, theta]).
+Distances are Euclidean on components divided by `EvalParams.sigma`, angle components
+wrapped to [-pi, pi).
+
+Association (per cycle, per truth): the nearest confirmed track within `gate`; several
+truths may share a track.
+Swap: at a cycle where the truth is resolved (every other truth farther than
+`resolved`), its associated track number differs from the one of its previous resolved
+cycle while that previous track is still live. Cycles where the truths are closer
+than `resolved` are skipped: there the nearest track is decided by noise, not by the
+tracker. A number change after the previous track was deleted is not a swap (a break).
+Lost: after its first association, the truth has no confirmed track within `gate` for
+more than `lost_cycles` consecutive cycles.
+Flag: over the cycles where a truth is associated, the fraction whose track is flagged
+ambiguous while the nearest other truth is closer than `near` ("during") and while it
+is farther than `far` ("outside": before and after the crossing).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from common.core.angles import wrap_pi
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One tracker cycle: truths (n, d) and live tracks (m, d) in the same space."""
+
+    t: float
+    truth_ids: np.ndarray
+    truth: np.ndarray
+    track_ids: np.ndarray
+    tracks: np.ndarray
+    confirmed: np.ndarray
+    ambiguous: np.ndarray
+
+    @classmethod
+    def of(cls, t: float, truth_ids: ArrayLike, truth: ArrayLike, track_ids: ArrayLike,
+           tracks: ArrayLike, confirmed: ArrayLike, ambiguous: ArrayLike, dim: int) -> "Frame":
+        """Frame from array-likes; positions reshaped to (count, dim)."""
+        ti = np.asarray(truth_ids, dtype=np.int64).reshape(-1)
+        ki = np.asarray(track_ids, dtype=np.int64).reshape(-1)
+        return cls(float(t), ti, np.asarray(truth, dtype=float).reshape(ti.size, dim), ki,
+                   np.asarray(tracks, dtype=float).reshape(ki.size, dim),
+                   np.asarray(confirmed, dtype=bool).reshape(-1),
+                   np.asarray(ambiguous, dtype=bool).reshape(-1))
+
+
+@dataclass(frozen=True)
+class EvalParams:
+    """Scales (per component), thresholds in scaled units, and the lost rule."""
+
+    sigma: tuple[float, ...]
+    gate: float = 5.0
+    resolved: float = 6.0
+    near: float = 1.0
+    far: float = 8.0
+    lost_cycles: int = 3
+    angle_idx: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True)
+class RunScore:
+    """Swaps and lost truths of one run, and the flag counts (flagged, cycles)."""
+
+    swaps: int
+    lost: int
+    flag_during: tuple[int, int]
+    flag_outside: tuple[int, int]
+
+
+def scaled_distance(a: np.ndarray, b: np.ndarray, p: EvalParams) -> np.ndarray:
+    """(n, m) Euclidean distance between rows of a and b in sigma units."""
+    d = a[:, None, :] - b[None, :, :]
+    if p.angle_idx:
+        idx = list(p.angle_idx)
+        d[..., idx] = wrap_pi(d[..., idx])
+    return np.sqrt(np.sum(np.square(d / np.asarray(p.sigma)), axis=-1))
+
+
+def associate(f: Frame, p: EvalParams) -> np.ndarray:
+    """(n,) track number of the nearest confirmed track within the gate, -1 if none."""
+    conf = np.flatnonzero(f.confirmed)
+    out = np.full(f.truth_ids.size, -1, dtype=np.int64)
+    if conf.size == 0 or f.truth_ids.size == 0:
+        return out
+    d = scaled_distance(f.truth, f.tracks[conf], p)
+    k = np.argmin(d, axis=1)
+    ok = d[np.arange(k.size), k] <= p.gate
+    out[ok] = f.track_ids[conf[k[ok]]]
+    return out
+
+
+def separation(f: Frame, p: EvalParams) -> np.ndarray:
+    """(n,) scaled distance from each truth to the nearest other truth (inf if alone)."""
+    d = scaled_distance(f.truth, f.truth, p)
+    np.fill_diagonal(d, np.inf)
+    return d.min(axis=1) if d.size else np.zeros(0)
+
+
+def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
+    """Swaps, lost truths and flag counts over the frames of one run (time order)."""
+    last: dict[int, int] = {}
+    seen: set[int] = set()
+    gap: dict[int, int] = {}
+    lost: set[int] = set()
+    swaps = 0
+    flags = np.zeros((2, 2), dtype=np.int64)  # rows during / outside: flagged, cycles
+    for f in frames:
+        tracks = associate(f, p)
+        sep = separation(f, p)
+        live = set(f.track_ids.tolist())
+        flagged = dict(zip(f.track_ids.tolist(), f.ambiguous.tolist()))
+        for truth, trk, s in zip(f.truth_ids.tolist(), tracks.tolist(), sep.tolist()):
+            if trk < 0:
+                if truth in seen:
+                    gap[truth] = gap.get(truth, 0) + 1
+                    if gap[truth] > p.lost_cycles:
+                        lost.add(truth)
+                continue
+            seen.add(truth)
+            gap[truth] = 0
+            for row, inside in ((0, s < p.near), (1, s > p.far)):
+                if inside:
+                    flags[row] += (int(flagged[trk]), 1)
+            if s > p.resolved:
+                prev = last.get(truth)
+                if prev is not None and prev != trk and prev in live:
+                    swaps += 1
+                last[truth] = trk
+    return RunScore(swaps, len(lost), (int(flags[0, 0]), int(flags[0, 1])),
+                    (int(flags[1, 0]), int(flags[1, 1])))
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Totals over runs: runs, runs with a swap, total swaps, runs with a lost truth,
+    and the flagged fractions during and outside the crossing (NaN without cycles)."""
+
+    runs: int
+    swap_runs: int
+    swaps: int
+    lost_runs: int
+    flag_during: float
+    flag_outside: float
+
+    @property
+    def swap_rate(self) -> float:
+        """Fraction of runs with at least one swap."""
+        return self.swap_runs / self.runs if self.runs else float("nan")
+
+
+def summarise(scores: Sequence[RunScore]) -> Summary:
+    """Aggregate per-run scores."""
+    fd = np.sum([s.flag_during for s in scores], axis=0) if scores else np.zeros(2)
+    fo = np.sum([s.flag_outside for s in scores], axis=0) if scores else np.zeros(2)
+    return Summary(
+        runs=len(scores),
+        swap_runs=sum(s.swaps > 0 for s in scores),
+        swaps=sum(s.swaps for s in scores),
+        lost_runs=sum(s.lost > 0 for s in scores),
+        flag_during=float(fd[0] / fd[1]) if fd[1] else float("nan"),
+        flag_outside=float(fo[0] / fo[1]) if fo[1] else float("nan"),
+    )

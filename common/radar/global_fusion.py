@@ -1,0 +1,467 @@
+"""Module 61 of 001 (management) and the cycle of step 24, "fusion posterior".
+
+`GlobalFusion.push(msg, stale)` takes one decoded `radar/etracks/<base>` message and
+returns the `radar/gtracks` messages of the cycles it completed. A cycle at time t runs
+when every base that is not `stale` has reported t or a later time; stale bases (the
+caller's judgement, e.g. silent for some seconds of wall time: the service decides, the
+core has no clock) are treated as not reporting in that cycle (their memberships are
+kept, without measurement). Within a cycle the bases are processed in configured order,
+so the output depends neither on the arrival order of one cycle's messages nor on how
+the bases' streams interleave, as long as no base is declared stale.
+
+Deviation (stated): 001's rule "every base reported t, or any base reported a later
+time" (and a tolerance in message time) assumes that all bases run in lock step with
+real time. When the chain runs faster than real time (replay, simulation) the per-base
+processes drift apart by tens of scans; a message-time rule then ran cycles without a
+base that was merely slow, rejected that base's report as late, and made the output
+depend on process timing (measured on crossing.toml: lags of up to 29 scans between
+bases at the fusion's input, different tracks from run to run).
+
+Cycle at t (001 figure 7):
+  predict every component of every global track to t ([55]-[56], IMM mixing);
+  module 63: confirm or dissociate the memberships ([48] <= gamma_max in one live
+    component of the track's mixture: a stated deviation), then add
+    free elementary tracks of non-contributing bases, including to tracks in pure
+    prediction (resolution loop);
+  module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
+    [46]); candidates that can be extended to more bases win conflicts, then lower
+    residual; a candidate's conflicts include the elementary tracks of the other bases
+    it would be extended to (without them, with four bases, pairs {b1, b2} and {b3,
+    b4} of one target made two tracks: 193 tracks for 100 targets); step 5 extends
+    the new tracks through module 63;
+  seed 004: ambiguity of the predicted plan positions (x, y) (CrossingManager),
+    alpha as gain; the altitude is left out (stated): it is resolved slowly by the
+    altitude bands, whose spread made every pair of tracks of dense.toml ambiguous,
+    kept them in memory mode and so never resolved (two aircraft at one plan position
+    are told apart by the elementary tracks' own crossing management);
+  module 64 + 65: per altitude band, localisation from the contributing updated
+    elementary tracks, then the EKF update with [49]-[50] of each component; new
+    weights, pruning and merging of the bands (common.radar.global_mixture);
+  module 61: score = sum of the contributing elementary scores; tracks without any
+    contributor stay in pure prediction (status coasting) and are deleted after
+    `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
+    whose contributors were reported but gave no measurement this scan (all ambiguous
+    or missed, e.g. crossing.toml t = 52, 59) is predicted only but keeps its status:
+    001 puts a track in pure prediction only when it has no contributor (there the
+    contributors' estimates would still update it).
+Decorrelation (complement of 001, common.radar.decorrelation): modules 64-65 do not take the
+elementary tracks' filtered estimates as measurements (their errors are correlated in
+time, which made the global covariance far too small), but the equivalent measurement
+of the scan recovered from two successive reports of each elementary track, i.e. the
+fused plot that track used. A contributing elementary track without a measurement this
+scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
+Module 63 ([48]) and module 62 keep using the estimates (common.radar.global_assoc says why).
+Module 64 during tracking is an iterated posterior linearisation started at each
+band's prediction (common.radar.localisation.linearised_position, stated deviation: the
+per-scan block mean is biased for poorly observed altitudes); a band whose residuals
+fail the chi-square test (gate_prob) gets no position update this scan, and a track
+none of whose bands passes is not located. The likelihood of the scan's ranges and
+azimuths under each band's prediction weighs the bands (common.radar.global_mixture).
+State (complement of 001 [44]-[46], stated): every track is a Gaussian sum over
+altitude bands x motion models (common.radar.global_mixture; common.radar.global_init.
+altitude_bands says why a low target needs it: crossing.toml's 1.5 km target had a
+mean NEES of 9.4 over 16 seeds with one Gaussian, 2.9 with the bands). x and P of a
+track are the moments of its mixture.
+Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
+model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
+(q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
+the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood of
+the scan's measurement [49]; a new track starts from the chain's stationary
+probabilities. Association (63), crossing (004) and output use the combined
+estimate. With one fixed Q the filter could not be both consistent on a straight
+target and follow a 2 deg/s turn (two_targets.toml): a Q sized for the turn made the
+straight target's covariance far too large (mean NEES 1.88), and the adaptive q used
+before (continuous noise level adjustment) reacted after the gate [48] had already
+dissociated the bases at the turn's onset (a new track took over, NEES bursts of 100-
+450). When the crossing test of 004 scales the gain by alpha, the likelihood is
+tempered by the same alpha (alpha = 0, memory mode: probabilities only predicted).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from common.radar import global_ekf, global_mixture
+from common.core import imm
+from common.radar.bistatic import POS, BaseGeometry
+from common.core.crossing import CrossingManager, CrossingParams
+from common.radar.decorrelation import Decorrelator
+from common.radar.elementary import ElementaryParams
+from common.core.gating import chi2_gate
+from common.radar.global_assoc import (YR, ETrackSet, component_gamma, gated_component_pairs,
+                                 gated_pairs, resolve)
+from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
+from common.radar.localisation import Constraints, linearised_position
+from common.core.track_table import STATUS_NAME, Status, TrackTable
+
+PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
+
+
+@dataclass(frozen=True)
+class FusionParams(InitParams):
+    """Parameters of `[radar.fusion]` (module 62 thresholds inherited from InitParams).
+
+    gate_prob: chi-square(3) probability of the gate gamma_max on [48], and probability
+        of the consistency test of module 64 (chi-square, 2 x contributing bases).
+    q, q_manoeuvre, q_z: process noise powers (m^2/s^3) of [51]: sigma_vxy^2 of the
+        quiet and of the manoeuvre model of the IMM (module doc), sigma_vz^2 of both;
+        q is also the PCRLB's model.
+    sojourn_quiet, sojourn_manoeuvre: mean time (s) spent in each model (IMM Markov
+        chain, common.core.imm.transition).
+    band_prune, band_prune_init, band_merge, band_linear: an altitude band of less mass
+        is dropped (band_prune_init at initialisation, where the two elementary
+        estimates can be biased: the weights then rest on one scan); two
+        bands whose altitudes differ by less than band_merge sigma are merged once
+        sigma_z < band_linear * height above the receiver (common.radar.global_mixture).
+    meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
+    confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
+        at least this many contributing updated elementary tracks.
+    max_coast: deletion after this many cycles without contributors (module 61).
+    max_wait: seconds of wall time without a message after which the service declares
+        a base stale (module doc; used by services/global_fusion, not by the core).
+    init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
+    eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
+        measurement against the elementary track's prediction (common.radar.decorrelation).
+    """
+
+    gate_prob: float = 0.999
+    q: float = 1.0
+    q_manoeuvre: float = 50.0
+    q_z: float = 1.0
+    sojourn_quiet: float = 60.0
+    sojourn_manoeuvre: float = 10.0
+    band_prune: float = 1e-3
+    band_prune_init: float = 1e-6
+    band_merge: float = 0.5
+    band_linear: float = 0.2
+    meas_inflation: float = 1.0
+    confirm_cycles: int = 3
+    confirm_bases: int = 2
+    max_coast: int = 5
+    max_wait: float = 3.0
+    init_confirmed_only: bool = True
+    eq_gate_prob: float = 0.99999
+
+
+def etrack_set(msgs: dict[int, dict[str, Any]], decorrelator: Decorrelator, t: float
+               ) -> ETrackSet:
+    """Stack the decoded etracks messages of one cycle (keyed by base index) and their
+    equivalent measurements at t."""
+    tr = [(b, e) for b, m in msgs.items() for e in m["tracks"]]
+    n = len(tr)
+    x = np.array([e["x"] for _, e in tr], dtype=float).reshape(n, 5)
+    P = np.array([e["P"] for _, e in tr], dtype=float).reshape(n, 5, 5)
+    base = np.array([b for b, _ in tr], dtype=np.intp)
+    ids = np.array([e["id"] for _, e in tr], dtype=np.int64)
+    updated = np.array([e["updated"] for _, e in tr], dtype=bool)
+    ambiguous = np.array([e["ambiguous"] for _, e in tr], dtype=bool)
+    z, Rz, meas = np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros(n, dtype=bool)
+    for b in msgs:
+        k = np.flatnonzero(base == b)
+        eq = decorrelator.step(b, t, ids[k], x[k], P[k], updated[k], ambiguous[k])
+        z[k], Rz[k], meas[k] = eq.z, eq.R, eq.ok
+    y, R = x[:, YR], P[:, YR][:, :, YR]
+    z[~meas], Rz[~meas] = y[~meas], R[~meas]  # finite placeholders, masked by meas
+    return ETrackSet(
+        base=base, id=ids, y=y, R=R,
+        score=np.array([e["score"] for _, e in tr], dtype=float),
+        confirmed=np.array([e["status"] == "confirmed" for _, e in tr], dtype=bool),
+        updated=updated, ambiguous=ambiguous, z=z, Rz=Rz, meas=meas,
+    )
+
+
+class GlobalFusion:
+    """Global Cartesian tracks from the elementary tracks of all bases (001 step 24)."""
+
+    def __init__(self, bases: list[BaseGeometry], params: FusionParams | None = None,
+                 crossing: CrossingParams | None = None,
+                 tracker: ElementaryParams | None = None) -> None:
+        """tracker: the elementary trackers' parameters ([radar.tracker]), for the F [19]
+        and Q [20] of the decorrelation."""
+        self.p = params or FusionParams()
+        et = tracker or ElementaryParams()
+        self.decorrelator = Decorrelator(et.sigma_gamma, et.sigma_omega,
+                                         chi2_gate(self.p.eq_gate_prob, 3))
+        self.init_p = InitParams(**{f.name: getattr(self.p, f.name)
+                                    for f in dataclasses.fields(InitParams)})
+        self.base_ids = [b.id for b in bases]
+        self.index = {b: i for i, b in enumerate(self.base_ids)}
+        self.tx = np.array([b.tx for b in bases], dtype=float)
+        self.rx = np.array([b.rx for b in bases], dtype=float)
+        if len(bases) < 2 or np.ptp(self.rx, axis=0).max() > 1e-6:
+            raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
+        B = len(bases)
+        self.A = self.p.alt_bands
+        K = 2 * self.A  # components: altitude bands x motion models (common.radar.global_mixture)
+        self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
+                                          "n_good": ((), np.int64), "confirmed": ((), bool),
+                                          "ambiguous": ((), bool),
+                                          "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
+                                          "mu": ((K,), float)})
+        self.q_models = np.array([self.p.q, self.p.q_manoeuvre])
+        self.sojourn = np.array([self.p.sojourn_quiet, self.p.sojourn_manoeuvre])
+        self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
+        self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
+        self.gamma_max = chi2_gate(self.p.gate_prob, 3)
+        self.chi2_gate = np.array([np.inf] + [chi2_gate(self.p.gate_prob, k)
+                                              for k in range(1, 2 * B + 1)])
+        self.az_gate = np.radians(self.p.az_gate_deg)
+        self.pending: dict[float, dict[int, dict[str, Any]]] = {}
+        self.t_last: float | None = None
+
+    def is_late(self, t: float) -> bool:
+        """True if a message of time t arrives after its cycle already ran."""
+        return self.t_last is not None and t <= self.t_last
+
+    def push(self, msg: dict[str, Any], stale: frozenset[str] = frozenset()
+             ) -> list[dict[str, Any]]:
+        """Buffer one etracks message (known base, not late); run the cycles completed
+        by the bases not in `stale` (base ids), oldest first."""
+        self.pending.setdefault(msg["t"], {})[self.index[msg["base"]]] = msg
+        need = {self.index[b] for b in self.base_ids if b not in stale}
+        out = []
+        while self.pending:
+            t0 = min(self.pending)
+            seen = {b for m in self.pending.values() for b in m}
+            if not need <= seen:
+                break  # some live base has reported neither t0 nor a later time
+            out.append(self.cycle(t0, self.pending.pop(t0)))
+        return out
+
+    def cycle(self, t: float, msgs: dict[int, dict[str, Any]]) -> dict[str, Any]:
+        """One fusion cycle at time t with the messages of the bases that reported
+        (processed in configured base order, whatever the arrival order)."""
+        msgs = dict(sorted(msgs.items()))
+        E = etrack_set(msgs, self.decorrelator, t)
+        reported = np.zeros(len(self.base_ids), dtype=bool)
+        reported[list(msgs)] = True
+        tab = self.table
+        live = tab.active_indices()
+        x, P, xm, Pm, c = self._predict(t, live)
+        row = self._confirm(live, (c, xm, Pm), E, reported)
+        free = np.ones(len(E), dtype=bool)
+        free[row[row >= 0]] = False
+        self._extend(live, (c, xm, Pm), E, reported, free, row)
+        new, used = self._initialise(t, E, reported, free)
+        if new.size:
+            grow = tab.capacity - x.shape[0]
+            x, P, xm, Pm, c = (np.concatenate([a, np.zeros((grow,) + a.shape[1:])])
+                               for a in (x, P, xm, Pm, c))
+            row = np.concatenate([row, np.full((grow, row.shape[1]), -1, dtype=np.intp)])
+            x[new], P[new] = tab.x[new], tab.P[new]
+            xm[new], Pm[new], c[new] = tab.xm[new], tab.Pm[new], tab.mu[new]
+            for k in range(used.shape[1]):
+                row[new, E.base[used[:, k]]] = used[:, k]
+            self._extend(new, (c, xm, Pm), E, reported, free, row)
+        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
+        return self._manage(t, E, row)
+
+    def _predict(self, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
+        """IMM mixing and model-matched prediction [55]-[56] of every component of the
+        live tracks to t: (x, P) combined, (xm, Pm) per component and the predicted
+        weights c, as arrays over all slots (rows of other slots: copies of the table)."""
+        tab = self.table
+        x, P, xm, Pm, c = tab.x.copy(), tab.P.copy(), tab.xm.copy(), tab.Pm.copy(), tab.mu.copy()
+        if live.size:
+            c[live], xm[live], Pm[live] = global_mixture.predict(
+                tab.mu[live], tab.xm[live], tab.Pm[live], t - tab.t_last[live], self.A,
+                self.sojourn, self.q_models, self.p.q_z)
+            x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
+        return x, P, xm, Pm, c
+
+    def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
+                 E: ETrackSet, reported: np.ndarray) -> np.ndarray:
+        """Module 63 task 1: row of E of every membership (cap, B) after dissociating
+        members that left or fail the gate [48] in every live component of the
+        predicted mixture (weights, means, covariances; global_assoc.
+        gated_component_pairs says why); -1 where none or base not reported."""
+        tab = self.table
+        B = len(self.base_ids)
+        row = np.full((tab.capacity, B), -1, dtype=np.intp)
+        s, b = np.nonzero(tab.has[live] & reported[None, :])
+        s = live[s]
+        keys = E.base * (1 << 40) + E.id
+        order = np.argsort(keys)
+        k = b * (1 << 40) + tab.member[s, b]
+        r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
+        ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
+        for bb in np.unique(b[ok]):
+            sel = np.flatnonzero(ok & (b == bb))
+            gam = component_gamma(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
+                                  self.tx[bb], self.rx[bb])  # [48]
+            ok[sel] = gam <= self.gamma_max
+        tab.has[s[~ok], b[~ok]] = False  # dissociation
+        row[s[ok], b[ok]] = r[ok]
+        return row
+
+    def _extend(self, slots: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
+                E: ETrackSet, reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
+        """Module 63 tasks 2-3: free elementary tracks of base b to the tracks of
+        `slots` that do not contain b, by the resolution loop (gate [48] per mixture
+        component: global_assoc.gated_component_pairs)."""
+        tab = self.table
+        for b in np.flatnonzero(reported):
+            tracks = slots[~tab.has[slots, b]]
+            ets = np.flatnonzero(free & (E.base == b))
+            i, m, g = gated_component_pairs(*mixture, tracks, ets, E, self.tx[b], self.rx[b],
+                                            self.az_gate, self.gamma_max)
+            ti, mi = resolve(i, m, g)
+            tab.has[ti, b] = True
+            tab.member[ti, b] = E.id[mi]
+            row[ti, b] = mi
+            free[mi] = False
+
+    def _initialise(self, t: float, E: ETrackSet, reported: np.ndarray,
+                    free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Module 62 on the free elementary tracks: (slots of the new tracks, their two
+        elementary tracks (n, 2) as rows of E)."""
+        none = np.zeros(0, dtype=np.intp), np.zeros((0, 2), dtype=np.intp)
+        ok = free & E.updated & (E.confirmed if self.p.init_confirmed_only else True)
+        ia, ib = [], []
+        for a in np.flatnonzero(reported):
+            for b in np.flatnonzero(reported):
+                if b <= a:
+                    continue
+                ra = np.flatnonzero(ok & (E.base == a))
+                rb = np.flatnonzero(ok & (E.base == b))
+                pa, pb = azimuth_pairs(E.y[ra, 2], E.y[rb, 2], self.az_gate)  # test 1
+                ia.append(ra[pa])
+                ib.append(rb[pb])
+        if not ia:
+            return none
+        cand = pair_candidates(E.y, E.R, E.base, np.concatenate(ia), np.concatenate(ib),
+                               self.tx, self.rx, self.init_p)  # tests 2-3, step 4
+        n_c = cand.rows.shape[0]
+        if n_c == 0:
+            return none
+        ext = np.full((n_c, len(self.base_ids)), -1, dtype=np.intp)
+        own = E.base[cand.rows]
+        for b in np.flatnonzero(reported):
+            ets = np.flatnonzero(free & (E.base == b))
+            i, m, g = gated_pairs(cand.x, cand.P, np.arange(n_c), ets, E, self.tx[b],
+                                  self.rx[b], self.az_gate, self.gamma_max)
+            order = np.lexsort((g, i))
+            i, m = i[order], m[order]
+            first = np.r_[True, i[1:] != i[:-1]] if i.size else np.zeros(0, dtype=bool)
+            ext[i[first], b] = m[first]  # the best elementary track of b for step 5
+        ext[np.arange(n_c)[:, None], own] = -1
+        n_ext = (ext >= 0).sum(axis=1)
+        win = select(np.concatenate([cand.rows, ext], axis=1), cand.cost - 1e6 * n_ext)
+        tab = self.table
+        slots = tab.add(win.size)
+        used = cand.rows[win]
+        xb, Pb, wb = altitude_bands(cand.x[win][:, POS], E.y, E.R, E.base, used,
+                                    self.tx, self.rx, self.init_p)
+        M = self.mu0.size
+        xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
+        mu = global_mixture.prune_merge((wb[:, :, None] * self.mu0).reshape(win.size, -1),
+                                        xm, Pm, self.A, self.p.band_prune_init, self.p.band_merge,
+                                        self.p.band_linear, self.rx[0, 2])
+        tab.xm[slots], tab.Pm[slots], tab.mu[slots] = xm, Pm, mu
+        tab.x[slots], tab.P[slots] = imm.combine(mu, xm, Pm)
+        tab.t_last[slots] = t
+        for k in range(2):
+            tab.has[slots, E.base[used[:, k]]] = True
+            tab.member[slots, E.base[used[:, k]]] = E.id[used[:, k]]
+            free[used[:, k]] = False
+        return slots, used
+
+    def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
+                P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
+                row: np.ndarray) -> None:
+        """Localisation (64) per altitude band, crossing test (004) on the combined
+        prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
+        `_predict`), new weights, pruning and merging (common.radar.global_mixture) at t."""
+        tab = self.table
+        r = row[live]
+        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
+        n_act = active.sum(1)
+        multi, single = n_act >= 2, n_act == 1
+        n, A = live.size, self.A
+        xl, Pl, cl = models[0][live], models[1][live], models[2][live]
+        M = cl.shape[1] // A
+        band = np.arange(cl.shape[1]) // M
+        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, A)
+        bpos, bpost = np.full((n, A, 3), np.nan), np.full((n, A, 3), np.nan)
+        bcov = np.full((n, A, 3, 3), np.nan)
+        bll, bok = np.zeros((n, A)), np.zeros((n, A), dtype=bool)
+        ti, ai = np.nonzero(multi[:, None] & (mass > 0))
+        if ti.size:
+            rm = r[ti]
+            sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
+            cons = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[ti],
+                               self.tx, self.rx)
+            zm, Rm, chi2, xpost, ll = linearised_position(  # module 64, per band
+                xb[ti, ai][:, POS], Pb[ti, ai][:, POS][:, :, POS], cons, self.p.z_min)
+            bpos[ti, ai], bcov[ti, ai], bpost[ti, ai], bll[ti, ai] = zm, Rm, xpost, ll
+            bok[ti, ai] = chi2 <= self.chi2_gate[2 * active[ti].sum(1)]
+        located = bok.any(axis=1)
+        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
+        post = np.where(located[:, None], bpost[np.arange(n), best], np.nan)
+        alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
+                                        P[live][:, PLAN][:, :, PLAN], z_meas=post[:, :2],
+                                        n_meas=int(located.sum()))
+        tab.ambiguous[live] = amb
+        infl = self.p.meas_inflation
+        ll_comp = np.zeros(cl.shape)
+        mu = cl.copy()
+        ti, ki = np.nonzero(bok[:, band] & (cl > 0))
+        if ti.size:
+            rl, ai = r[ti], band[ki]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.fused_update(  # module 65
+                xl[ti, ki], Pl[ti, ki], bpos[ti, ai], infl * bcov[ti, ai], E.z[rl, 1],
+                infl * E.Rz[rl, 1, 1], active[ti], self.tx, self.rx, alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[located] = global_mixture.reweight(cl[located], alpha[located, None] * bll[located],
+                                                  ll_comp[located], A)
+        ti, ki = np.nonzero(single[:, None] & (cl > 0))
+        if ti.size:
+            rs = r[ti][active[ti]]
+            bs = np.nonzero(active[ti])[1]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.single_base_update(
+                xl[ti, ki], Pl[ti, ki], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs],
+                alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[single] = imm.probabilities(cl[single], ll_comp[single])
+        mu = global_mixture.prune_merge(mu, xl, Pl, A, self.p.band_prune, self.p.band_merge,
+                                       self.p.band_linear, self.rx[0, 2])
+        tab.xm[live], tab.Pm[live], tab.mu[live] = xl, Pl, mu
+        tab.x[live], tab.P[live] = imm.combine(mu, xl, Pl)
+        tab.t_last[live] = t
+        updated = located | single
+        tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
+        tab.n_good[live] += n_act >= self.p.confirm_bases
+        tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
+        reporting = (r >= 0).any(axis=1)  # a contributing elementary track was reported
+        tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
+                                    np.where(tab.confirmed[live], Status.CONFIRMED,
+                                             Status.TENTATIVE))
+
+    def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> dict[str, Any]:
+        """Module 61: scores, deletion, recycling; the gtracks message of the cycle."""
+        tab = self.table
+        live = tab.active_indices()
+        r = row[live]
+        tab.score[live] = np.append(E.score, 0.0)[r].sum(axis=1)  # module 61
+        orphan = ~tab.has[live].any(axis=1)
+        dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
+        if dead.size:
+            self.crossing.forget(tab.id[dead])
+            tab.remove(dead)
+        self.t_last = t
+        tracks = []
+        for s in tab.active_indices():
+            tracks.append({
+                "id": int(tab.id[s]), "status": STATUS_NAME[Status(tab.status[s])],
+                "x": tab.x[s].tolist(), "P": tab.P[s].ravel().tolist(),
+                "score": float(tab.score[s]),
+                "etracks": [[self.base_ids[b], int(tab.member[s, b])]
+                            for b in np.flatnonzero(tab.has[s])],
+                "ambiguous": bool(tab.ambiguous[s]),
+            })
+        return {"v": 1, "t": float(t), "tracks": tracks}
+

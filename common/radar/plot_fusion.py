@@ -1,0 +1,256 @@
+"""Fused plots of one bistatic base (seed 001, step 23, operation 221: modules 31-34).
+
+Scan assembly: a scan at time t is complete when every configured channel has reported
+t, or as soon as any channel reports a later time (missing channels count as empty).
+
+Module 31, aggregation: plots p1, p2 of different channels aggregate when their
+2-sigma intervals overlap on r_b, v_b and theta (001 [5]). Aggregates are the connected
+components of that relation, with one constraint: at most one plot per channel in an
+aggregate (two plots of one channel are never fused, directly or through a third plot).
+Within a component that would violate it, compatible pairs are merged closest pair
+first (normalised distance max_c |d_c| / (2 (s1_c + s2_c)), in [0, 1]) while the two
+groups share no channel. So a plot compatible with two aggregates bridges them into one
+unless they have a channel in common; then it joins the one holding its closest
+compatible plot and the other stays separate.
+
+Module 32, fusion: inverse-covariance weighting (001 [6]-[7]); the covariances are
+diagonal (001 [4]) so it is per component; azimuths are averaged on the circle.
+
+Module 34: score = number of channels in the aggregate; with n <= 2 configured
+channels every fused plot is kept (singles too), with n > 2 only score >= n - p.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from common.core.angles import wrap_2pi, wrap_pi
+
+COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz")
+
+
+class LateInput(ValueError):
+    """A channel message that cannot enter any open scan; ``reason`` names why."""
+
+    def __init__(self, reason: str, detail: str) -> None:
+        super().__init__(f"{reason}: {detail}")
+        self.reason = reason
+        self.detail = detail
+
+
+@dataclass(frozen=True)
+class PlotterParams:
+    """Parameters of table [radar.plotter].
+
+    n_sigma: half-width of the aggregation intervals in sigmas (2, as in 001 [5]).
+    """
+
+    n_sigma: float = 2.0
+
+
+@dataclass
+class Plots:
+    """Columnar plots y = [rb, vb, az] with sigmas (001 [1]-[4]), plus n_ch per plot
+    (number of channels of a fused plot, 1 for a channel plot)."""
+
+    rb: np.ndarray
+    vb: np.ndarray
+    az: np.ndarray
+    srb: np.ndarray
+    svb: np.ndarray
+    saz: np.ndarray
+    n_ch: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def __len__(self) -> int:
+        return int(self.rb.shape[0])
+
+    @classmethod
+    def empty(cls) -> "Plots":
+        z = np.zeros(0)
+        return cls(z, z, z, z, z, z, np.zeros(0, dtype=np.int64))
+
+    @classmethod
+    def concat(cls, parts: list["Plots"]) -> "Plots":
+        if not parts:
+            return cls.empty()
+        return cls(*(np.concatenate([getattr(p, c) for p in parts]) for c in COLUMNS + ("n_ch",)))
+
+    def take(self, idx: np.ndarray) -> "Plots":
+        return Plots(*(getattr(self, c)[idx] for c in COLUMNS + ("n_ch",)))
+
+    @property
+    def y(self) -> np.ndarray:
+        """Measurements (N, 3) = [rb, vb, az]."""
+        return np.column_stack([self.rb, self.vb, self.az])
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """Standard deviations (N, 3)."""
+        return np.column_stack([self.srb, self.svb, self.saz])
+
+
+def overlap_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs (i, j), i < j in index order of the sort, of closed intervals
+    [lo, hi] that intersect, by a sort-and-sweep (no N^2 matrix). Returns original
+    indices (a, b) with lo[a] <= lo[b]."""
+    order = np.argsort(lo, kind="stable")
+    lo_s, hi_s = lo[order], hi[order]
+    end = np.searchsorted(lo_s, hi_s, side="right")  # j < end: lo_j <= hi_i
+    start = np.arange(lo_s.size) + 1
+    count = np.maximum(end - start, 0)
+    total = int(count.sum())
+    if total == 0:
+        e = np.zeros(0, dtype=np.intp)
+        return e, e
+    i = np.repeat(np.arange(lo_s.size), count)
+    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    j = start[i] + offset
+    return order[i], order[j]
+
+
+def compatible_pairs(p: Plots, channel: np.ndarray, n_sigma: float = 2.0
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pairs (a, b) of plots of different channels satisfying 001 [5], and their
+    normalised distance max_c |d_c| / (n_sigma (s_a,c + s_b,c)) in [0, 1]."""
+    a, b = overlap_pairs(p.rb - n_sigma * p.srb, p.rb + n_sigma * p.srb)  # 001 [5] r_b
+    keep = channel[a] != channel[b]
+    a, b = a[keep], b[keep]
+    d_rb = np.abs(p.rb[a] - p.rb[b]) / (n_sigma * (p.srb[a] + p.srb[b]))
+    d_vb = np.abs(p.vb[a] - p.vb[b]) / (n_sigma * (p.svb[a] + p.svb[b]))
+    d_az = np.abs(wrap_pi(p.az[a] - p.az[b])) / (n_sigma * (p.saz[a] + p.saz[b]))
+    # 001 [5]: [y1 - 2s1, y1 + 2s1] and [y2 - 2s2, y2 + 2s2] intersect iff
+    # |y1 - y2| <= 2 (s1 + s2); azimuth difference taken on the circle.
+    ok = (d_vb <= 1.0) & (d_az <= 1.0)
+    dist = np.maximum(np.maximum(d_rb, d_vb), d_az)[ok]
+    return a[ok], b[ok], dist
+
+
+def _constrained_merge(n: int, a: np.ndarray, b: np.ndarray, dist: np.ndarray,
+                       channel: np.ndarray) -> np.ndarray:
+    """Closest-pair-first union of the pairs (a, b) while groups share no channel;
+    returns a group label per plot. Only run on components with a channel conflict."""
+    parent = np.arange(n)
+    chans = [{int(c)} for c in channel]
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for k in np.lexsort((b, a, dist)):
+        ra, rb = find(int(a[k])), find(int(b[k]))
+        if ra != rb and not (chans[ra] & chans[rb]):
+            parent[rb] = ra
+            chans[ra] |= chans[rb]
+    return np.array([find(i) for i in range(n)], dtype=np.intp)
+
+
+def aggregate(p: Plots, channel: np.ndarray, n_sigma: float = 2.0) -> np.ndarray:
+    """Module 31: aggregate label per plot (0..K-1), see the module docstring."""
+    n = len(p)
+    if n == 0:
+        return np.zeros(0, dtype=np.intp)
+    a, b, dist = compatible_pairs(p, channel, n_sigma)
+    graph = coo_matrix((np.ones(a.size), (a, b)), shape=(n, n))
+    k, labels = connected_components(graph, directed=False)
+    # components holding two plots of one channel need the constrained merge
+    pair = labels.astype(np.int64) * (int(channel.max()) + 1) + channel
+    uniq, cnt = np.unique(pair, return_counts=True)
+    bad = np.unique(uniq[cnt > 1] // (int(channel.max()) + 1))
+    if bad.size:
+        in_bad = np.isin(labels, bad)
+        sub = np.flatnonzero(in_bad)
+        local = np.full(n, -1, dtype=np.intp)
+        local[sub] = np.arange(sub.size)
+        e = in_bad[a]
+        groups = _constrained_merge(sub.size, local[a[e]], local[b[e]], dist[e], channel[sub])
+        labels = labels.copy()
+        labels[sub] = k + groups
+    return np.unique(labels, return_inverse=True)[1]
+
+
+def fuse(p: Plots, labels: np.ndarray) -> Plots:
+    """Module 32: inverse-covariance weighted pseudo-measurement per aggregate
+    (001 [6]-[7]), n_ch = number of plots (= channels) in the aggregate (module 34)."""
+    k = int(labels.max()) + 1 if labels.size else 0
+    if k == 0:
+        return Plots.empty()
+    n_ch = np.bincount(labels, minlength=k)
+    first = np.unique(labels, return_index=True)[1]
+    ref = p.az[first][labels]  # azimuths averaged as offsets from one member of each aggregate
+    out = []
+    for y, s in ((p.rb, p.srb), (p.vb, p.svb), (wrap_pi(p.az - ref), p.saz)):
+        w = 1.0 / np.square(s)  # R_j^-1, diagonal (001 [4])
+        R = 1.0 / np.bincount(labels, weights=w, minlength=k)  # 001 [7]
+        out.append((R * np.bincount(labels, weights=w * y, minlength=k), np.sqrt(R)))  # 001 [6]
+    (rb, srb), (vb, svb), (daz, saz) = out
+    az = wrap_2pi(p.az[first] + daz)
+    return Plots(rb, vb, az, srb, svb, saz, n_ch.astype(np.int64))
+
+
+def accept(fused: Plots, n_channels: int, p: int) -> Plots:
+    """Module 34 acceptance: n <= 2 channels keep all; n > 2 keep score >= n - p."""
+    if n_channels <= 2:
+        return fused
+    return fused.take(np.flatnonzero(fused.n_ch >= n_channels - p))
+
+
+def fuse_scan(per_channel: list[Plots], n_channels: int, p: int, n_sigma: float = 2.0
+              ) -> Plots:
+    """Modules 31-34 on the channel plots of one scan (one Plots per channel)."""
+    plots = Plots.concat(per_channel)
+    channel = np.repeat(np.arange(len(per_channel)), [len(q) for q in per_channel])
+    return accept(fuse(plots, aggregate(plots, channel, n_sigma)), n_channels, p)
+
+
+class PlotFusion:
+    """Scan assembly + modules 31-34 for one base; driven by message times only."""
+
+    def __init__(self, channels: list[str], p: int, params: PlotterParams | None = None) -> None:
+        self.channels = list(channels)
+        self.p = p
+        self.params = params or PlotterParams()
+        self._last = {c: -np.inf for c in self.channels}
+        self._emitted = -np.inf
+        self._newest = -np.inf
+        self._pending: dict[float, dict[str, Plots]] = {}
+
+    def push(self, channel: str, t: float, plots: Plots) -> list[tuple[float, Plots]]:
+        """Add one channel's plots at time t; returns the scans completed by it, in time
+        order, as (t, fused plots). Raises LateInput for an unknown channel, a time not
+        after that channel's last, or a scan already emitted."""
+        if channel not in self._last:
+            raise LateInput("unknown_channel", f"channel '{channel}' is not configured")
+        if t <= self._last[channel]:
+            raise LateInput("time_backwards", f"channel {channel}: t={t} after t={self._last[channel]}")
+        if t <= self._emitted:
+            raise LateInput("late_scan", f"channel {channel}: scan t={t} already published")
+        self._last[channel] = t
+        self._newest = max(self._newest, t)
+        self._pending.setdefault(t, {})[channel] = plots
+        n = len(self.channels)
+        done = [s for s in sorted(self._pending) if s < self._newest or len(self._pending[s]) == n]
+        out = []
+        for s in done:
+            got = self._pending.pop(s)
+            per_channel = [got.get(c, Plots.empty()) for c in self.channels]
+            out.append((s, fuse_scan(per_channel, len(self.channels), self.p, self.params.n_sigma)))
+            self._emitted = s
+        return out
+
+
+def window_pairs(lo: np.ndarray, hi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs (i, j) with lo[i] <= v[j] <= hi[i], by sorting v (no N x M matrix)."""
+    order = np.argsort(v, kind="stable")
+    v_s = v[order]
+    start = np.searchsorted(v_s, lo, side="left")
+    count = np.maximum(np.searchsorted(v_s, hi, side="right") - start, 0)
+    total = int(count.sum())
+    i = np.repeat(np.arange(lo.size), count)
+    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    return i, order[start[i] + offset]

@@ -1,0 +1,79 @@
+"""Formulas of seed 000 (first embodiment) for bearing tracking: gate value G, track
+quality increment dL, SPRT thresholds T1/T2, linear-array bearing sigma, measurement
+matrix H.
+
+All functions are vectorised over leading axes. Units: bearings in radians, amplitude
+as a level in dB (000 calls the intensity "la amplitud o el nivel"), frequency in Hz.
+Deviation (units): G and dL mix the beam spacing (rad) with sqrt|S| (rad x dB [x Hz]),
+exactly as printed in the seed; the implicit amplitude / frequency reference is 1 dB /
+1 Hz.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+LN_2PI = math.log(2.0 * math.pi)
+
+
+def measurement_matrix(narrowband: bool) -> np.ndarray:
+    """H of 000: z = [brg, amp] from x = [brg, brg_rate, amp, amp_rate]; narrowband
+    z = [brg, amp, freq] from x = [..., freq, freq_rate] (ordering of common.core.motion)."""
+    if not narrowband:
+        return np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])  # 000 H
+    H = np.zeros((3, 6))
+    H[0, 0] = H[1, 2] = H[2, 4] = 1.0
+    return H
+
+
+def gate_value(
+    p_d: float, p_fa: float, beam_spacing: float, det_S: ArrayLike, M: int
+) -> np.ndarray:
+    """000 gate G = 2 ln( P_D dTheta / ((1 - P_D) (2 pi)^(M/2) P_FA sqrt|S|) ).
+
+    G is exactly the d^2 below which an association raises L more than a missed
+    detection does (dL_hit > ln(1 - P_D), see `quality_increment`)."""
+    det_S = np.asarray(det_S, dtype=float)
+    return 2.0 * (
+        math.log(p_d * beam_spacing / ((1.0 - p_d) * (2.0 * math.pi) ** (M / 2.0) * p_fa))
+        - 0.5 * np.log(det_S)
+    )
+
+
+def quality_increment(
+    p_d: float, p_fa: float, beam_spacing: float, det_S: ArrayLike, d2: ArrayLike, M: int
+) -> np.ndarray:
+    """000 claim 4: dL = ln( P_D dTheta / (P_FA sqrt|S|) ) - (d^2 + M ln 2 pi) / 2."""
+    det_S = np.asarray(det_S, dtype=float)
+    return (
+        math.log(p_d * beam_spacing / p_fa)
+        - 0.5 * np.log(det_S)
+        - 0.5 * (np.asarray(d2, dtype=float) + M * LN_2PI)
+    )
+
+
+def missed_increment(p_d: float) -> float:
+    """dL of a missed detection, ln(1 - P_D). The seed only says that L decreases when
+    there is no measurement; ln(1 - P_D) is the log-likelihood ratio of a miss in the
+    sequential test it cites (Blackman & Popoli ch. 6) and the value that makes G the
+    break-even d^2 of the hit increment."""
+    return math.log(1.0 - p_d)
+
+
+def thresholds(alpha: float, beta: float) -> tuple[float, float]:
+    """000 claim 2: T1 = ln(beta / (1 - alpha)) (delete), T2 = ln((1 - beta) / alpha)
+    (confirm); alpha = P(confirm a false track), beta = P(delete a true track)."""
+    return math.log(beta / (1.0 - alpha)), math.log((1.0 - beta) / alpha)
+
+
+def linear_array_sigma(
+    brg: ArrayLike, amp: ArrayLike, heading: ArrayLike, sigma0: float, endfire: float
+) -> np.ndarray:
+    """000 claim 6: sigma = sigma0 / (|sin(theta - theta_0)| sqrt(a)), a the linear
+    amplitude (> 0). Deviation: |sin| is floored at sin(endfire) because the law is
+    infinite at endfire."""
+    s = np.maximum(np.abs(np.sin(np.asarray(brg, dtype=float) - heading)), math.sin(endfire))
+    return sigma0 / (s * np.sqrt(np.asarray(amp, dtype=float)))  # 000 claim 6

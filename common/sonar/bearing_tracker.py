@@ -1,0 +1,524 @@
+"""Single-hypothesis bearing tracker of seed 000 (first embodiment), on the shared core.
+
+One `BearingTracker.step` per detection list (one clock cycle k), driven by the message
+time only:
+  1. prediction with the straight-line-segment model (000 F, Q; common.core.motion);
+  2. d^2 = y' S^-1 y for every track x detection (000 d_1^2), gate d^2 <= G (000 G,
+     per pair since |S| differs per pair); a bearing-only pre-gate d_brg^2 <= G_max
+     keeps the full computation to the plausible pairs and loses none (the marginal
+     d^2 never exceeds the full one, and |S| >= |R| bounds G from above);
+  3. global nearest neighbour on the gated d^2 (000: GNN cost matrix);
+  4. seed 004 crossing management on the confirmed tracks: alpha as gain weight; a
+     track leaving the ambiguity keeps its detection only if no other confirmed track's
+     prediction is nearer to it (deviation, see `_exit_pairs`);
+  5. Kalman update with the Joseph-form covariance (000 P(k/k));
+  6. track quality L(k) = L(k-1) + dL (000 claim 4), ln(1 - P_D) for a miss;
+     tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2); confirmed
+     deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
+  7. every unassociated detection opens a tentative track, x(1) = H' z, P(1) = P0,
+     L(1) = 0 (000 initialisation);
+  8. narrowband: multi-line tracks (000 claims 12-13, common.sonar.multiline);
+  9. the bearing register (000 register 13): estimated bearings of every track from its
+     first detection, with the own-ship position, for TMA.
+
+Amplitude is tracked as a level in dB, a = 10 log10(amp) (000: "la amplitud o el
+nivel"), so that the simulator's log-normal amplitude noise is additive; the linear
+amplitude enters the linear-array sigma law. Bearings wrap at 0 / 2 pi everywhere
+(innovations wrapped to [-pi, pi), estimates to [0, 2 pi)).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+
+from common.core.angles import wrap_2pi, wrap_pi
+from common.core.assignment import gnn
+from common.sonar.bearing_model import (
+    gate_value,
+    linear_array_sigma,
+    measurement_matrix,
+    missed_increment,
+    quality_increment,
+    thresholds,
+)
+from common.core.crossing import CrossingManager, CrossingParams, wrapped_diff
+from common.core.kalman import predict, update
+from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
+from common.sonar.multiline import NEW, MultiLineGrouper, group_means
+from common.core.track_table import Status, TrackTable
+
+
+@dataclass(frozen=True)
+class TrackerParams:
+    """[sonar.tracker] parameters (000 first embodiment).
+
+    mode: "broadband" z = [brg, amp], "narrowband" z = [brg, amp, freq], or "auto"
+        (the service picks narrowband when the first detection list carries freq[]).
+    q_theta, q_a, q_f: process noise powers of Q (rad^2/s^3, dB^2/s^3, Hz^2/s^3).
+    sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
+    p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL).
+    beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
+    alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
+    delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
+    endfire_deg: floor of |sin(brg - heading)| in the linear-array sigma law.
+    init_*_rate_sigma: P0 of the rates (brg rad/s, amp dB/s, freq Hz/s).
+    crossing: run seed 004 crossing management ([sonar.crossing]) on confirmed tracks.
+    band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
+    ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
+    history_keep_deleted: deleted confirmed tracks whose history stays queryable.
+    """
+
+    mode: Literal["auto", "broadband", "narrowband"] = "auto"
+    q_theta: float = 1e-8
+    q_a: float = 1e-4
+    q_f: float = 1e-6
+    sigma_amp_db: float = 3.0
+    sigma_freq_hz: float = 0.05
+    p_d: float = 0.9
+    p_fa: float = 1e-3
+    beam_spacing_deg: float = 2.0
+    alpha: float = 1e-4
+    beta: float = 1e-2
+    delete_drop: float = 12.0
+    endfire_deg: float = 10.0
+    init_brg_rate_sigma: float = 0.002
+    init_amp_rate_sigma: float = 0.05
+    init_freq_rate_sigma: float = 0.002
+    crossing: bool = True
+    band_hz: list[float] = field(default_factory=lambda: [10.0, 1000.0])
+    ml_brg_tol_deg: float = 2.0
+    ml_rate_tol_deg_s: float = 0.1
+    history_keep_deleted: int = 64
+
+
+class TimeOrderError(ValueError):
+    """A detection list whose time is not after the previous one."""
+
+
+@dataclass(frozen=True)
+class MultiLineTrack:
+    """A multi-line track (claims 12-13): its number, line track ids, mean bearing/rate."""
+
+    id: int
+    lines: np.ndarray
+    brg: float
+    brg_rate: float
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """Tracks after one step, in slot order: ids (N,), confirmed (N,) bool, x (N, n),
+    P (N, n, n), quality L (N,), ambiguous (N,), ml (N,) multi-line numbers (NEW = -1
+    when not a confirmed narrowband line), and the multi-line tracks."""
+
+    t: float
+    ids: np.ndarray
+    confirmed: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    quality: np.ndarray
+    ambiguous: np.ndarray
+    ml: np.ndarray
+    multiline: list[MultiLineTrack]
+
+
+
+HISTORY_COLUMNS = ("t", "brg", "sbrg", "own_x", "own_y")
+
+
+class BearingHistory:
+    """Bearing register (000 register 13): rows (t, brg, sbrg, own_x, own_y) appended
+    once per cycle for all live tracks in one block, keyed by a never-recycled serial
+    number (uid). A deleted confirmed track stays queryable under its number until the
+    number is reused or `keep_deleted` later confirmed tracks were deleted; rows nobody
+    can query any more are dropped by an amortised compaction."""
+
+    def __init__(self, keep_deleted: int = 64, min_compact_rows: int = 100_000) -> None:
+        self.keep_deleted = keep_deleted
+        self.min_compact_rows = min_compact_rows
+        self._uid: list[np.ndarray] = []
+        self._rows: list[np.ndarray] = []
+        self._n = 0
+        self._compact_at = min_compact_rows
+        self.retired_ids = np.zeros(0, dtype=np.int64)
+        self.retired_uids = np.zeros(0, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def append(self, t: float, uid: np.ndarray, brg: np.ndarray, sbrg: np.ndarray,
+               own_x: float, own_y: float) -> None:
+        """Log one cycle: one row per live track."""
+        k = uid.size
+        block = np.column_stack([np.full(k, t), brg, sbrg, np.full(k, own_x), np.full(k, own_y)])
+        self._uid.append(np.asarray(uid, dtype=np.int64))
+        self._rows.append(block)
+        self._n += k
+
+    def retire(self, ids: np.ndarray, uids: np.ndarray) -> None:
+        """Keep the history of deleted confirmed tracks queryable under their numbers."""
+        self.release(ids)
+        self.retired_ids = np.concatenate([self.retired_ids, ids])[-self.keep_deleted:]
+        self.retired_uids = np.concatenate([self.retired_uids, uids])[-self.keep_deleted:]
+
+    def release(self, ids: np.ndarray) -> None:
+        """Track numbers reused by new tracks: their retired history is no longer served."""
+        keep = ~np.isin(self.retired_ids, ids)
+        self.retired_ids, self.retired_uids = self.retired_ids[keep], self.retired_uids[keep]
+
+    def retired_uid(self, track_id: int) -> int | None:
+        """uid of the deleted confirmed track that had this number, if still kept."""
+        hit = np.flatnonzero(self.retired_ids == track_id)
+        return int(self.retired_uids[hit[-1]]) if hit.size else None
+
+    def _consolidate(self) -> tuple[np.ndarray, np.ndarray]:
+        if len(self._rows) > 1:
+            self._uid = [np.concatenate(self._uid)]
+            self._rows = [np.concatenate(self._rows)]
+        if not self._rows:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, len(HISTORY_COLUMNS)))
+        return self._uid[0], self._rows[0]
+
+    def rows(self, uid: int) -> dict[str, np.ndarray]:
+        """The logged columns of one track, in time order."""
+        uids, rows = self._consolidate()
+        sel = rows[uids == uid]
+        return {c: sel[:, i] for i, c in enumerate(HISTORY_COLUMNS)}
+
+    def maybe_compact(self, live_uids: np.ndarray) -> None:
+        """Drop rows of tracks that are neither live nor retired, once the log has
+        doubled since the last compaction (amortised O(1) per row)."""
+        if self._n < self._compact_at:
+            return
+        uids, rows = self._consolidate()
+        keep = np.isin(uids, np.concatenate([live_uids, self.retired_uids]))
+        self._uid, self._rows = [uids[keep]], [rows[keep]]
+        self._n = int(keep.sum())
+        self._compact_at = max(2 * self._n, self.min_compact_rows)
+
+
+class BearingTracker:
+    """Seed 000 single-hypothesis bearing tracker for one array (see module docstring)."""
+
+    def __init__(
+        self,
+        params: TrackerParams,
+        array_kind: str,
+        sigma0: float,
+        crossing: CrossingParams | None = None,
+    ) -> None:
+        self.params = p = params
+        if p.mode == "auto":
+            raise ValueError('resolve mode "auto" before building the tracker')
+        self.narrowband = p.mode == "narrowband"
+        self.array_kind = array_kind
+        self.sigma0 = sigma0
+        self.H = measurement_matrix(self.narrowband)
+        self.m, self.n = self.H.shape
+        self.beam = math.radians(p.beam_spacing_deg)
+        self.T1, self.T2 = thresholds(p.alpha, p.beta)
+        self.table = TrackTable(
+            self.n,
+            extra={"L_max": ((), np.float64), "uid": ((), np.int64),
+                   "ml": ((), np.int64), "ambiguous": ((), np.bool_)},
+        )
+        self.crossing: CrossingManager | None = None
+        self._cross_dims = [0, 2] if self.narrowband else [0]
+        if p.crossing:
+            cp = crossing or CrossingParams()
+            if self.narrowband:  # seed 004 c: volume of the (bearing, frequency) space
+                cp = replace(cp, volume=2.0 * math.pi * (p.band_hz[1] - p.band_hz[0]))
+            self.crossing = CrossingManager(cp)
+        self.multiline = (
+            MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
+            if self.narrowband else None
+        )
+        self.history = BearingHistory(p.history_keep_deleted)
+        self.t: float | None = None
+        self._next_uid = 0
+        self._ml_tracks: list[MultiLineTrack] = []
+
+    # ------------------------------------------------------------------ model
+
+    def _F(self, T: np.ndarray) -> np.ndarray:
+        return bearing_freq_F(T) if self.narrowband else bearing_F(T)
+
+    def _Q(self, T: np.ndarray) -> np.ndarray:
+        p = self.params
+        if self.narrowband:
+            return bearing_freq_Q(T, p.q_theta, p.q_a, p.q_f)
+        return bearing_Q(T, p.q_theta, p.q_a)
+
+    def bearing_sigma(self, brg: np.ndarray, amp: np.ndarray, heading: float) -> np.ndarray:
+        """sigma^mess of the bearing: 000 claim 6 for linear arrays, sigma0 otherwise."""
+        if self.array_kind == "linear":
+            return linear_array_sigma(brg, amp, heading, self.sigma0, math.radians(self.params.endfire_deg))
+        return np.full(np.shape(brg), self.sigma0)
+
+    def _R_diag(self, brg: np.ndarray, level: np.ndarray, heading: float) -> np.ndarray:
+        """Diagonal of 000 R per measurement (K, m): sigma_brg^2, sigma_a^2[, sigma_f^2]."""
+        p = self.params
+        cols = [self.bearing_sigma(brg, 10.0 ** (level / 10.0), heading) ** 2,
+                np.full(brg.shape, p.sigma_amp_db**2)]
+        if self.narrowband:
+            cols.append(np.full(brg.shape, p.sigma_freq_hz**2))
+        return np.column_stack(cols)
+
+    # ------------------------------------------------------------------ cycle
+
+    def step(
+        self,
+        t: float,
+        brg: np.ndarray,
+        amp: np.ndarray,
+        heading: float,
+        own_x: float = 0.0,
+        own_y: float = 0.0,
+        freq: np.ndarray | None = None,
+        sbrg: np.ndarray | None = None,
+    ) -> Cycle:
+        """Process the detection list of time t (true bearings rad, linear amplitudes > 0,
+        frequencies Hz for narrowband; sbrg, when given, the sensor's bearing sigmas
+        used instead of the array law) and return the tracks."""
+        if self.t is not None and not t > self.t:
+            raise TimeOrderError(f"t={t} is not after the previous cycle t={self.t}")
+        if self.narrowband and freq is None:
+            raise ValueError("narrowband tracking needs detection frequencies")
+        p, tab, H = self.params, self.table, self.H
+        brg = wrap_2pi(np.asarray(brg, dtype=float).reshape(-1))
+        level = 10.0 * np.log10(np.asarray(amp, dtype=float).reshape(-1))
+        cols = [brg, level] + ([np.asarray(freq, dtype=float).reshape(-1)] if self.narrowband else [])
+        z = np.column_stack(cols)
+        Rd = self._R_diag(brg, level, heading)
+        if sbrg is not None:
+            Rd[:, 0] = np.square(np.asarray(sbrg, dtype=float).reshape(-1))
+        n_det = brg.size
+
+        idx = tab.active_indices()
+        x, P = tab.x[idx], tab.P[idx]
+        if idx.size:
+            T = t - tab.t_last[idx]
+            x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
+            x[:, 0] = wrap_2pi(x[:, 0])
+        rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
+        alpha, ambiguous = self._crossing(t, idx, x, P, z, rows, cols_, heading, n_det)
+        keep = self._exit_pairs(idx, x, z, Rd, rows, cols_, ambiguous)
+        rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
+        R = _diag(Rd[cols_])
+
+        if rows.size:  # 000 x^(k/k), K(k), Joseph-form P^(k/k)
+            xu, Pu, _, _ = update(x[rows], P[rows], y, H, R, joseph=True, gain_scale=alpha[rows])
+            xu[:, 0] = wrap_2pi(xu[:, 0])
+            x[rows], P[rows] = xu, Pu
+
+        dL = np.full(idx.size, missed_increment(p.p_d))
+        dL[rows] = quality_increment(p.p_d, p.p_fa, self.beam, detS, d2, self.m)  # 000 claim 4
+        L = tab.score[idx] + dL  # 000 L(k) = L(k-1) + dL
+        L_max = np.maximum(tab.L_max[idx], L)
+        tentative = tab.status[idx] == Status.TENTATIVE
+        confirm = tentative & (L > self.T2)  # 000 claim 2
+        delete = (tentative & (L < self.T1)) | (~tentative & (L < L_max - p.delete_drop))
+        hit = np.zeros(idx.size, dtype=bool)
+        hit[rows] = True
+
+        tab.x[idx], tab.P[idx], tab.t_last[idx] = x, P, t
+        tab.score[idx], tab.L_max[idx], tab.ambiguous[idx] = L, L_max, ambiguous
+        tab.n_updates[idx] += hit
+        tab.n_coast[idx] = np.where(hit, 0, tab.n_coast[idx] + 1)
+        tab.status[idx[confirm]] = Status.CONFIRMED
+        self._delete(idx[delete])
+
+        unused = ~gated
+        unused[cols_] = False
+        self._open(t, z[unused], Rd[unused])
+        self._group_lines()
+
+        live = tab.active_indices()
+        self.history.append(t, tab.uid[live], tab.x[live, 0], np.sqrt(tab.P[live, 0, 0]), own_x, own_y)
+        self.history.maybe_compact(tab.uid[live])
+        self.t = t
+        return self._cycle(t, live)
+
+    def _associate(
+        self, x: np.ndarray, P: np.ndarray, z: np.ndarray, Rd: np.ndarray, idx: np.ndarray
+    ) -> tuple[np.ndarray, ...]:
+        """Gated GNN (000 d^2, G, GNN) -> track rows, detection cols, innovations y,
+        |S| and d^2 of the assigned pairs, and the mask (M,) of detections inside the
+        gate of a confirmed track.
+
+        The mask implements 000 "medidas superfluas con las que no pueden ser asociadas
+        trazas de marcacion son valoradas como el inicio de una nueva traza": a detection
+        that could be associated with a confirmed track (inside its gate) but lost the
+        GNN assignment does not open a track. Deviation from "every unassociated
+        detection": without it a clutter detection next to a target opens a duplicate
+        track that then takes the target's detections over (seen on sonar_tma)."""
+        p, m = self.params, self.m
+        N, M = x.shape[0], z.shape[0]
+        empty = np.zeros(0, dtype=np.intp)
+        gated = np.zeros(M, dtype=bool)
+        if N == 0 or M == 0:
+            return empty, empty, np.zeros((0, m)), np.zeros(0), np.zeros(0), gated
+        zp = x @ self.H.T
+        A = self.H @ P @ self.H.T  # H P^pre H'
+        yb = wrap_pi(z[None, :, 0] - zp[:, None, 0])
+        d2b = yb**2 / (A[:, 0, 0, None] + Rd[None, :, 0])
+        G_max = gate_value(p.p_d, p.p_fa, self.beam, np.prod(Rd, axis=1), m)
+        ti, dj = np.nonzero(d2b <= G_max[None, :])
+        y = z[dj] - zp[ti]  # 000 y = z - H x^pre
+        y[:, 0] = wrap_pi(y[:, 0])
+        S = A[ti] + _diag(Rd[dj])  # 000 S = H P^pre H' + R
+        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])  # 000 d_1^2
+        detS = np.linalg.det(S)
+        ok = d2 <= gate_value(p.p_d, p.p_fa, self.beam, detS, m)  # 000 gate G
+        ti, dj, y, d2, detS = ti[ok], dj[ok], y[ok], d2[ok], detS[ok]
+        gated[dj[self.table.status[idx[ti]] == Status.CONFIRMED]] = True
+        cost = np.full((N, M), np.inf)
+        cost[ti, dj] = d2
+        pair = np.full((N, M), -1, dtype=np.intp)
+        pair[ti, dj] = np.arange(ti.size)
+        rows, cols = gnn(cost)  # 000 GNN on the squared statistical distances
+        k = pair[rows, cols]
+        return rows, cols, y[k], detS[k], d2[k], gated
+
+    def _crossing(
+        self, t: float, idx: np.ndarray, x: np.ndarray, P: np.ndarray, z: np.ndarray,
+        rows: np.ndarray, cols: np.ndarray, heading: float, n_det: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Seed 004 on the confirmed tracks' predicted bearings (and frequencies):
+        alpha (N,) gain weights and ambiguity flags. Deviation: tentative tracks are
+        left out (alpha = 1, not ambiguous): a clutter track next to a confirmed track
+        would otherwise freeze it in memory mode."""
+        N = idx.size
+        alpha, amb = np.ones(N), np.zeros(N, dtype=bool)
+        conf = np.flatnonzero(self.table.status[idx] == Status.CONFIRMED)
+        if self.crossing is None or conf.size == 0:
+            return alpha, amb
+        dims = self._cross_dims
+        zp = (x[conf] @ self.H.T)
+        Rp = self._R_diag(zp[:, 0], zp[:, 1], heading)
+        cov = _diag(Rp)[:, dims][:, :, dims]  # 004: g is the measurement noise density
+        zm = np.full((N, self.m), np.nan)
+        zm[rows] = z[cols]
+        a, f = self.crossing.step(
+            t, self.table.id[idx[conf]], zp[:, dims], cov, zm[conf][:, dims], n_det, angle_idx=[0]
+        )
+        alpha[conf], amb[conf] = a, f
+        return alpha, amb
+
+    def _exit_pairs(
+        self, idx: np.ndarray, x: np.ndarray, z: np.ndarray, Rd: np.ndarray,
+        rows: np.ndarray, cols: np.ndarray, ambiguous: np.ndarray,
+    ) -> np.ndarray:
+        """Mask (K,) of the GNN pairs kept for the update. A confirmed track that leaves
+        the ambiguity at this scan (flagged at the previous cycle, not now: the end of
+        the memory mode of 004 claim 5, or claim 6) keeps its detection only if no
+        other confirmed track's prediction is nearer to it, in the measurement noise
+        metric of 004 g on the crossing components; otherwise the scan is a miss for it
+        (no update, dL = ln(1 - P_D)); the detection still opens no track, it lies in a
+        confirmed gate.
+        Deviation (not in 004, which leaves the re-acquisition to the tracker): the
+        track's P has grown by Q over the whole memory mode, so its gate is wide and
+        its first gain near one; with a missed detection of its own target (P_D < 1)
+        GNN hands it the other target's detection (or a clutter detection nearer the
+        other track), which moves it onto the other target in one update. Seen on
+        sonar_cross_1dpm_uneq (both tracks on the weak target, the strong one lost)."""
+        keep = np.ones(rows.size, dtype=bool)
+        if self.crossing is None or rows.size == 0:
+            return keep
+        tab = self.table
+        conf = tab.status[idx] == Status.CONFIRMED
+        leaving = conf[rows] & tab.ambiguous[idx[rows]] & ~ambiguous[rows]
+        if not leaving.any():
+            return keep
+        dims = self._cross_dims
+        zp = (x[conf] @ self.H.T)[:, dims]
+        pos = np.flatnonzero(conf)
+        k = np.flatnonzero(leaving)
+        diff = wrapped_diff(z[cols[k]][:, None, dims], zp[None, :, :], [0])
+        dist = np.sum(diff**2 / Rd[cols[k]][:, None, dims], axis=2)  # (k, confirmed)
+        keep[k] = pos[np.argmin(dist, axis=1)] == rows[k]
+        return keep
+
+    def _delete(self, slots: np.ndarray) -> None:
+        """Delete tracks; confirmed ones keep their history under their number."""
+        tab = self.table
+        conf = slots[tab.status[slots] == Status.CONFIRMED]
+        self.history.retire(tab.id[conf], tab.uid[conf])
+        if self.crossing is not None:
+            self.crossing.forget(tab.id[slots])
+        tab.remove(slots)
+
+    def _open(self, t: float, z: np.ndarray, Rd: np.ndarray) -> None:
+        """000 initialisation: one tentative track per unassociated measurement,
+        x(1) = H' z, P(1) = P0 (measurement variances, configured rate variances)."""
+        k = z.shape[0]
+        if k == 0:
+            return
+        p, tab = self.params, self.table
+        slots = tab.add(k)
+        self.history.release(tab.id[slots])
+        tab.x[slots] = z @ self.H
+        rates = [p.init_brg_rate_sigma, p.init_amp_rate_sigma, p.init_freq_rate_sigma][: self.m]
+        var = np.empty((k, self.n))
+        var[:, 0::2] = Rd
+        var[:, 1::2] = np.square(rates)
+        tab.P[slots] = _diag(var)
+        tab.t_last[slots] = t
+        tab.L_max[slots] = 0.0
+        tab.ml[slots] = NEW
+        tab.uid[slots] = np.arange(self._next_uid, self._next_uid + k)
+        self._next_uid += k
+
+    def _group_lines(self) -> None:
+        """Claims 12-13 over the confirmed line tracks (narrowband only)."""
+        if self.multiline is None:
+            return
+        tab = self.table
+        live = tab.active_indices()
+        conf = live[tab.status[live] == Status.CONFIRMED]
+        tab.ml[live] = np.where(tab.status[live] == Status.CONFIRMED, tab.ml[live], NEW)
+        if conf.size == 0:
+            self._ml_tracks = []
+            return
+        labels = self.multiline.step(tab.ml[conf], tab.x[conf, 0], tab.x[conf, 1])
+        tab.ml[conf] = labels
+        groups, mb, mr, inv = group_means(labels, tab.x[conf, 0], tab.x[conf, 1])
+        ids = tab.id[conf]
+        self._ml_tracks = [
+            MultiLineTrack(int(g), ids[inv == i], float(mb[i]), float(mr[i]))
+            for i, g in enumerate(groups)
+        ]
+
+    def _cycle(self, t: float, live: np.ndarray) -> Cycle:
+        tab = self.table
+        return Cycle(
+            t, tab.id[live].copy(), tab.status[live] == Status.CONFIRMED, tab.x[live].copy(),
+            tab.P[live].copy(), tab.score[live].copy(), tab.ambiguous[live].copy(),
+            tab.ml[live].copy(), list(self._ml_tracks),
+        )
+
+    # ------------------------------------------------------------------ register
+
+    def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
+        """("confirmed" | "deleted", columns t, brg, sbrg, own_x, own_y) of a confirmed
+        (live or recently deleted) track, from its first detection; None otherwise."""
+        tab = self.table
+        slot = track_id - tab.first_id
+        if 0 <= slot < tab.capacity and tab.id[slot] == track_id:
+            if tab.status[slot] != Status.CONFIRMED:
+                return None
+            return "confirmed", self.history.rows(int(tab.uid[slot]))
+        uid = self.history.retired_uid(track_id)
+        return None if uid is None else ("deleted", self.history.rows(uid))
+
+
+def _diag(v: np.ndarray) -> np.ndarray:
+    """Batch of diagonal matrices (K, m, m) from diagonals (K, m)."""
+    out = np.zeros(v.shape + (v.shape[-1],))
+    i = np.arange(v.shape[-1])
+    out[..., i, i] = v
+    return out

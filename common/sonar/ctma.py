@@ -1,0 +1,480 @@
+"""Constrained TMA with detection and correction of wrong bounds (seed 003, ES 2 400 413).
+
+Per processing cycle (003 Fig. 2 and 6, claims 1-3): the TMA solution of ``common.sonar.tma``
+is compared with the bounds on range R, course K and speed V; inside them it is the
+answer. Otherwise the constrained TMA (CTMA) runs; before the convergence instant of the
+TMA (convergence detector 78) the CTMA solution is output with its bounds; after it the
+error handling 14 runs: feasibility check 38 (residual check 42 with the residual factor
+Q, edge checks 52 and 54) and correction module 40 (re-centre the violated intervals, at
+most ``max_corrections`` times a cycle, then minimal bounds 75 when Q is high).
+
+R, K, V and the bounds refer to the current time (latest bearing) of each cycle; the
+course interval runs clockwise from ``k_min`` to ``k_max``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import chi2
+
+from common.sonar.tma import (
+    Support,
+    TmaSolution,
+    covariance,
+    detect_manoeuvre,
+    leg_times,
+    solve_tma,
+    weighted_system,
+)
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Bounds on range (m), course (rad, clockwise interval k_min -> k_max) and speed (m/s).
+
+    ``k_min == k_max`` (mod 2 pi) means no course bound.
+    """
+
+    r_min: float
+    r_max: float
+    k_min: float
+    k_max: float
+    v_min: float
+    v_max: float
+
+    @property
+    def course_width(self) -> float:
+        """Width of the course interval in (0, 2 pi]."""
+        w = (self.k_max - self.k_min) % TWO_PI
+        return TWO_PI if w == 0.0 else w
+
+    def violations(self, r: float, k: float, v: float) -> np.ndarray:
+        """Flags (R, K, V) outside their interval (control unit 30, 003 claim 2b)."""
+        return np.array([
+            not self.r_min <= r <= self.r_max,
+            (k - self.k_min) % TWO_PI > self.course_width,
+            not self.v_min <= v <= self.v_max,
+        ])
+
+    def contains(self, r: float, k: float, v: float) -> bool:
+        """True when (R, K, V) lies inside the solution space of the bounds."""
+        return not self.violations(r, k, v).any()
+
+
+# 003 Fig. 5 "valores límites mínimos 75": 0.1-100 km, 0.1-15 m/s, all courses
+# (the seed prints 0-350 deg; the full circle is used).
+MINIMAL_BOUNDS = Bounds(100.0, 100e3, 0.0, TWO_PI, 0.1, 15.0)
+
+
+@dataclass(frozen=True)
+class CtmaConfig:
+    """Parameters of the TMA/CTMA cycle (``[sonar.tma.ctma]``).
+
+    q1, q2, q3: residual-factor thresholds (q1 > q2 > q3) over 1, 2, 3 consecutive
+        cycles (003 Fig. 4).
+    q_minimal: Q above which minimal bounds replace the corrected ones (003 Fig. 5).
+    edge_tol: fraction of an interval width within which a value is "on the edge".
+    edge_cycles: consecutive cycles on the edge that make an edge error.
+    max_corrections: bound corrections allowed per cycle (003 Fig. 5: 3).
+    roc_window, roc_threshold: convergence detector: cycles in the window and relative
+        spread of the estimated range below which the solution is "post" (003 Fig. 6).
+    tma_tol, max_iter: Gauss-Newton stop rule of 002 claim 17 (||Delta p|| in m) and
+        the iteration cap.
+    detect_manoeuvres: run the residual-based manoeuvre detector after convergence.
+    manoeuvre_p_false: false alarm probability of that detector (Bonferroni-corrected).
+    """
+
+    q1: float = 2.0
+    q2: float = 1.5
+    q3: float = 1.25
+    q_minimal: float = 1.5
+    edge_tol: float = 0.02
+    edge_cycles: int = 2
+    max_corrections: int = 3
+    roc_window: int = 5
+    roc_threshold: float = 0.05
+    tma_tol: float = 1.0
+    max_iter: int = 50
+    detect_manoeuvres: bool = False
+    manoeuvre_p_false: float = 1e-3
+
+
+def rkv(x: np.ndarray, own_c: np.ndarray) -> tuple[float, float, float]:
+    """Range, course (rad in [0, 2 pi)) and speed of the state (x, y, vx, vy)."""
+    return (
+        float(np.hypot(x[0] - own_c[0], x[1] - own_c[1])),
+        float(np.arctan2(x[2], x[3]) % TWO_PI),
+        float(np.hypot(x[2], x[3])),
+    )
+
+
+def _course_into(k: float, b: Bounds) -> float:
+    """Course unwrapped into [k_min, k_min + width], clipped to the nearer edge if outside."""
+    w = b.course_width
+    d = (k - b.k_min) % TWO_PI
+    if d > w:
+        d = w if d - w < TWO_PI - d else 0.0
+    return b.k_min + d
+
+
+def solve_ctma(
+    t: np.ndarray,
+    brg: np.ndarray,
+    sbrg: np.ndarray | float,
+    own_xy: np.ndarray,
+    t0: float,
+    bounds: Bounds,
+    start: TmaSolution,
+    support: Sequence[Support] = (),
+    legs: Sequence[float] = (),
+) -> TmaSolution:
+    """Constrained TMA: bearing least squares with R, K, V of the current leg bounded (003 claim 1).
+
+    Parameterisation p = (B, R, K, V, Vx_j, Vy_j of earlier legs): the target sits at
+    range R on bearing B from the own position at the latest bearing time and moves with
+    speed V on course K; box bounds on (R, K, V) go to scipy's trust-region reflective
+    least squares. Starts: the TMA solution clipped into the bounds and the centre of the
+    bounds; the lower cost wins. P is the unconstrained (H'WH)^-1 at the solution.
+    """
+    t = np.asarray(t, float)
+    brg = np.asarray(brg, float)
+    own_xy = np.asarray(own_xy, float)
+    sb = np.broadcast_to(np.asarray(sbrg, float), t.shape)
+    legs = tuple(legs)
+    m = int(np.argmax(t))
+    oc = own_xy[m]
+    Tc = leg_times(np.array([t[m]]), t0, legs)[0]
+    L = Tc.size
+
+    def to_beta(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        b, r, k, v = p[:4]
+        vel = np.concatenate((p[4:], [v * np.sin(k), v * np.cos(k)]))
+        beta = np.concatenate(([oc[0] + r * np.sin(b) - vel[0::2] @ Tc, oc[1] + r * np.cos(b) - vel[1::2] @ Tc], vel))
+        D = np.zeros((beta.size, p.size))
+        D[0, :2] = r * np.cos(b), np.sin(b)
+        D[1, :2] = -r * np.sin(b), np.cos(b)
+        D[-2, 2:4] = v * np.cos(k), np.sin(k)
+        D[-1, 2:4] = -v * np.sin(k), np.cos(k)
+        D[2:-2, 4:] = np.eye(2 * (L - 1))
+        D[0] -= Tc @ D[2::2]
+        D[1] -= Tc @ D[3::2]
+        return beta, D
+
+    def fun(p: np.ndarray) -> np.ndarray:
+        return -weighted_system(to_beta(p)[0], t, brg, sb, own_xy, t0, support, legs)[0]
+
+    def jac(p: np.ndarray) -> np.ndarray:
+        beta, D = to_beta(p)
+        return weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)[1] @ D
+
+    w = bounds.course_width
+    full = w >= TWO_PI
+    lb = np.full(2 + 2 * L, -np.inf)
+    ub = np.full(2 + 2 * L, np.inf)
+    lb[1], ub[1] = bounds.r_min, bounds.r_max
+    lb[3], ub[3] = bounds.v_min, bounds.v_max
+    if not full:
+        lb[2], ub[2] = bounds.k_min, bounds.k_min + w
+    x_s, _ = start.state_at(t[m])
+    r_s, k_s, v_s = rkv(x_s, oc)
+    k_s = k_s if full else _course_into(k_s, bounds)
+    starts = [
+        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s, k_s, v_s], start.beta[2:-2])),
+        np.concatenate(([brg[m], np.sqrt(bounds.r_min * bounds.r_max), bounds.k_min + 0.5 * w,
+                         0.5 * (bounds.v_min + bounds.v_max)], start.beta[2:-2])),
+    ]
+    fin_lb, fin_ub = np.isfinite(lb), np.isfinite(ub)
+    span = np.where(fin_lb & fin_ub, ub - lb, 0.0)
+    best = None
+    for x0 in starts:
+        x0 = np.where(fin_lb, np.maximum(x0, lb + 1e-6 * span + 1e-9), x0)
+        x0 = np.where(fin_ub, np.minimum(x0, ub - 1e-6 * span - 1e-9), x0)
+        res = least_squares(fun, x0, jac=jac, bounds=(lb, ub), method="trf", x_scale="jac", max_nfev=200)
+        if best is None or res.cost < best.cost:
+            best = res
+    beta, _ = to_beta(best.x)
+    d, Hw, r = weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)
+    return TmaSolution(beta, covariance(Hw), float(t0), legs, r, float(d @ d), int(best.nfev), bool(best.status > 0),
+                       float(t[m]))
+
+
+def residual_factor(ctma_res: np.ndarray, tma_res: np.ndarray, sbrg: np.ndarray | float) -> float:
+    """Q = sum|CTMA residuals| / sum|TMA residuals|, residuals weighted by 1/sigma (003 Fig. 4, block 46)."""
+    s = np.asarray(sbrg, float)
+    return float(np.sum(np.abs(ctma_res) / s) / max(np.sum(np.abs(tma_res) / s), 1e-300))
+
+
+def residual_alarm(q_history: Sequence[float], cfg: CtmaConfig) -> bool:
+    """Residual check 42/48: Q >= q1 once, >= q2 in 2 or >= q3 in 3 consecutive cycles."""
+    q = np.asarray(q_history, float)
+    return bool(
+        (q.size >= 1 and q[-1] >= cfg.q1)
+        or (q.size >= 2 and np.all(q[-2:] >= cfg.q2))
+        or (q.size >= 3 and np.all(q[-3:] >= cfg.q3))
+    )
+
+
+def edge_flags(r: float, k: float, v: float, b: Bounds, tol: float) -> np.ndarray:
+    """First edge check 52: (R, K, V) on the edge (within tol * width) or outside of the bounds."""
+    fr = r <= b.r_min + tol * (b.r_max - b.r_min) or r >= b.r_max - tol * (b.r_max - b.r_min)
+    fv = v <= b.v_min + tol * (b.v_max - b.v_min) or v >= b.v_max - tol * (b.v_max - b.v_min)
+    w = b.course_width
+    fk = False
+    if w < TWO_PI:
+        d = (k - b.k_min) % TWO_PI
+        fk = d <= tol * w or d >= (1.0 - tol) * w
+    return np.array([fr, fk, fv])
+
+
+def _arc(angles: np.ndarray) -> tuple[float, float]:
+    """Smallest clockwise arc (start, end) containing all angles."""
+    a = np.sort(np.asarray(angles) % TWO_PI)
+    gaps = np.diff(np.concatenate((a, [a[0] + TWO_PI])))
+    i = int(np.argmax(gaps))
+    return float(a[(i + 1) % a.size]), float(a[i])
+
+
+def state_bounds(b: Bounds, own_c: np.ndarray, brg_c: float) -> tuple[np.ndarray, np.ndarray]:
+    """State bounds on p = (x, y, vx, vy) at the current time derived from (R, K, V) bounds (003 edge check 54).
+
+    Position: the segment R in [r_min, r_max] on the current bearing; velocity: the
+    annular sector V in [v_min, v_max], K in the course interval. Deviation: the seed
+    bounds (X0, Y0) at track start; the current time is used because R refers to it.
+    """
+    u = np.array([np.sin(brg_c), np.cos(brg_c)])
+    pos = own_c + np.outer([b.r_min, b.r_max], u)
+    w = b.course_width
+    k0 = b.k_min % TWO_PI
+    ks = np.array([k0, k0 + w] + [c for c in np.arange(0.0, 2.0 * TWO_PI, np.pi / 2) if k0 <= c <= k0 + w])
+    vel = np.concatenate([np.stack((v * np.sin(ks), v * np.cos(ks)), 1) for v in (b.v_min, b.v_max)])
+    lo = np.concatenate((pos.min(0), vel.min(0)))
+    hi = np.concatenate((pos.max(0), vel.max(0)))
+    return lo, hi
+
+
+def effective_bounds(lo: np.ndarray, hi: np.ndarray, own_c: np.ndarray) -> Bounds:
+    """Effective (weaker) R, K, V bounds re-converted from state bounds (003 edge check 54)."""
+    pc = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]]) - own_c
+    near = np.clip(own_c, lo[:2], hi[:2]) - own_c
+    vc = np.array([[lo[2], lo[3]], [lo[2], hi[3]], [hi[2], lo[3]], [hi[2], hi[3]]])
+    tol = 1e-9 * np.max(np.abs(vc))
+    vnear = np.clip(np.zeros(2), lo[2:], hi[2:])
+    if np.all(np.abs(vnear) <= tol):
+        vnear = np.zeros(2)
+        k_min, k_max = 0.0, TWO_PI
+    else:
+        k_min, k_max = _arc(np.arctan2(vc[:, 0], vc[:, 1]))
+    return Bounds(
+        float(np.hypot(*near)), float(np.max(np.hypot(pc[:, 0], pc[:, 1]))),
+        k_min, k_max,
+        float(np.hypot(*vnear)), float(np.max(np.hypot(vc[:, 0], vc[:, 1]))),
+    )
+
+
+def recentre(b: Bounds, flags: np.ndarray, r: float, k: float, v: float, minimal: Bounds = MINIMAL_BOUNDS) -> Bounds:
+    """Correction module 40 / unit 72: shift each flagged interval so the estimate is at its centre.
+
+    Widths are kept; range and speed intervals are shifted back inside ``minimal``.
+    """
+
+    def shift(lo: float, hi: float, x: float, mlo: float, mhi: float) -> tuple[float, float]:
+        w = min(hi - lo, mhi - mlo)
+        lo = min(max(x - 0.5 * w, mlo), mhi - w)
+        return lo, lo + w
+
+    out = b
+    if flags[0]:
+        out = replace(out, **dict(zip(("r_min", "r_max"), shift(b.r_min, b.r_max, r, minimal.r_min, minimal.r_max))))
+    if flags[1] and b.course_width < TWO_PI:
+        w = b.course_width
+        out = replace(out, k_min=(k - 0.5 * w) % TWO_PI, k_max=(k + 0.5 * w) % TWO_PI)
+    if flags[2]:
+        out = replace(out, **dict(zip(("v_min", "v_max"), shift(b.v_min, b.v_max, v, minimal.v_min, minimal.v_max))))
+    return out
+
+
+class ConvergenceDetector:
+    """Convergence phase detector 78 (003 Fig. 6).
+
+    ROC = spread of the target range over the last ``window`` TMA solutions, each
+    propagated to the current time and measured from the current own position, as
+    std / mean. Deviation: relative rather than absolute spread, so that one threshold
+    fits all ranges. "post" is latched once ROC <= threshold.
+    """
+
+    def __init__(self, window: int = 5, threshold: float = 0.05) -> None:
+        self.window = window
+        self.threshold = threshold
+        self.states: list[tuple[float, np.ndarray]] = []
+        self.roc = np.inf
+        self.phase = "pre"
+
+    def update(self, t: float, own_c: np.ndarray, state: np.ndarray | None) -> str:
+        """Add the TMA state (x, y, vx, vy) at time ``t`` (None: TMA failed); return the phase."""
+        self.states.append((t, None if state is None else np.asarray(state, float)))
+        self.states = self.states[-self.window:]
+        if len(self.states) < self.window or any(s is None for _, s in self.states):
+            self.roc = np.inf
+        else:
+            r = np.array([np.hypot(s[0] + s[2] * (t - ts) - own_c[0], s[1] + s[3] * (t - ts) - own_c[1])
+                          for ts, s in self.states])
+            self.roc = float(np.std(r) / np.mean(r))
+        if self.roc <= self.threshold:
+            self.phase = "post"
+        return self.phase
+
+
+@dataclass(frozen=True)
+class CycleOutput:
+    """One processing cycle's target data at time ``t`` (current = latest bearing).
+
+    ``residual_factor`` is 1.0 when the TMA solution was inside the bounds (CTMA = TMA).
+    ``legs`` are the manoeuvre times in use.
+    """
+
+    t: float
+    x: float
+    y: float
+    vx: float
+    vy: float
+    P: np.ndarray
+    range: float
+    course: float
+    speed: float
+    constrained: bool
+    bounds: Bounds | None
+    bounds_modified: bool
+    phase: str
+    residual_factor: float
+    legs: tuple[float, ...]
+    roc: float
+
+
+class TmaTracker:
+    """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3)."""
+
+    def __init__(self, bounds: Bounds | None = None, config: CtmaConfig = CtmaConfig()) -> None:
+        self.bounds = bounds
+        self.cfg = config
+        self.t = np.empty(0)
+        self.brg = np.empty(0)
+        self.sbrg = np.empty(0)
+        self.own = np.empty((0, 2))
+        self.support: list[Support] = []
+        self.legs: tuple[float, ...] = ()
+        self.t0: float | None = None
+        self.tma: TmaSolution | None = None
+        self.detector = ConvergenceDetector(config.roc_window, config.roc_threshold)
+        self.q_hist: list[float] = []
+        self.edge_streak = np.zeros((2, 3), int)
+
+    def _solve_tma(self) -> TmaSolution:
+        args = (self.t, self.brg, self.sbrg, self.own, self.t0)
+        kw = dict(support=self.support, legs=self.legs, tol=self.cfg.tma_tol, max_iter=self.cfg.max_iter)
+        cold = solve_tma(*args, **kw)
+        if self.tma is None or not self.tma.converged:
+            return cold
+        warm = solve_tma(*args, beta0=self.tma.beta, **kw)
+        return warm if warm.converged and warm.cost <= cold.cost else cold
+
+    def update(
+        self, t: np.ndarray, brg: np.ndarray, sbrg: np.ndarray | float, own_xy: np.ndarray,
+        support: Sequence[Support] = (),
+    ) -> CycleOutput | None:
+        """Add bearings (times, bearings, sigmas, own positions (N, 2)) and run one cycle.
+
+        Returns None while fewer than 4 bearings are known.
+        """
+        t = np.atleast_1d(np.asarray(t, float))
+        self.t = np.concatenate((self.t, t))
+        self.brg = np.concatenate((self.brg, np.atleast_1d(brg)))
+        self.sbrg = np.concatenate((self.sbrg, np.broadcast_to(np.asarray(sbrg, float), t.shape)))
+        self.own = np.vstack((self.own, np.asarray(own_xy, float).reshape(-1, 2)))
+        self.support.extend(support)
+        if self.t0 is None:
+            self.t0 = float(self.t.min())
+        if self.t.size < 4:
+            return None
+        m = int(np.argmax(self.t))
+        tc, oc = float(self.t[m]), self.own[m]
+        tma = self._solve_tma()
+        self.tma = tma
+        phase = self.detector.update(tc, oc, tma.state_at(tc)[0] if tma.converged else None)
+        if self.cfg.detect_manoeuvres and phase == "post":
+            tma = self._manoeuvre(tma)
+        return self._constrain(tma, tc, oc, phase)
+
+    def _manoeuvre(self, tma: TmaSolution) -> TmaSolution:
+        """Add a leg when the residuals reject the current legs (002 claim 13)."""
+        dof = self.t.size - tma.beta.size
+        if dof <= 0 or tma.cost <= chi2.isf(0.01, dof):
+            return tma
+        ta = detect_manoeuvre(self.t, self.brg, self.sbrg, self.own, self.t0, tma, self.support,
+                              p_false=self.cfg.manoeuvre_p_false)
+        if ta is None:
+            return tma
+        self.legs = self.legs + (ta,)
+        self.tma = self._solve_tma()
+        return self.tma
+
+    def _output(self, sol: TmaSolution, tc: float, oc: np.ndarray, constrained: bool, modified: bool,
+                phase: str, q: float) -> CycleOutput:
+        x, P = sol.state_at(tc)
+        r, k, v = rkv(x, oc)
+        return CycleOutput(tc, *map(float, x), P, r, k, v, constrained, self.bounds, modified, phase, q,
+                           self.legs, self.detector.roc)
+
+    def _constrain(self, tma: TmaSolution, tc: float, oc: np.ndarray, phase: str) -> CycleOutput:
+        """TMA inside bounds -> TMA; else CTMA, and after convergence the error handling 14."""
+        cfg = self.cfg
+        x_t, _ = tma.state_at(tc)
+        rkv_t = rkv(x_t, oc)
+        if self.bounds is None or self.bounds.contains(*rkv_t):
+            self.q_hist.append(1.0)
+            self.edge_streak[:] = 0
+            return self._output(tma, tc, oc, False, False, phase, 1.0)
+        modified = False
+        z = 0
+        data = (self.t, self.brg, self.sbrg, self.own, self.t0)
+        while True:
+            ctma = solve_ctma(*data, self.bounds, tma, self.support, self.legs)
+            q = residual_factor(ctma.residuals, tma.residuals, self.sbrg)
+            if phase == "pre":
+                self.q_hist.append(q)
+                return self._output(ctma, tc, oc, True, modified, phase, q)
+            x_c, _ = ctma.state_at(tc)
+            r, k, v = rkv(x_c, oc)
+            brg_c = float(np.arctan2(x_c[0] - oc[0], x_c[1] - oc[1]))
+            eff = effective_bounds(*state_bounds(self.bounds, oc, brg_c), oc)
+            flags = np.stack((edge_flags(r, k, v, self.bounds, cfg.edge_tol), edge_flags(r, k, v, eff, cfg.edge_tol)))
+            streak = np.where(flags, self.edge_streak + 1, 0)
+            edge_err = np.any(streak >= cfg.edge_cycles, axis=0)
+            res_err = residual_alarm(self.q_hist + [q], cfg)
+            if not (res_err or edge_err.any()):
+                break
+            if z >= cfg.max_corrections:
+                if q > cfg.q_minimal and self.bounds != MINIMAL_BOUNDS:
+                    self.bounds, modified = MINIMAL_BOUNDS, True
+                    if self.bounds.contains(*rkv_t):
+                        self.q_hist.append(1.0)
+                        self.edge_streak[:] = 0
+                        return self._output(tma, tc, oc, False, True, phase, 1.0)
+                    continue
+                break
+            to_fix = flags.any(axis=0) if flags.any() else self.bounds.violations(*rkv_t)
+            self.bounds = recentre(self.bounds, to_fix, r, k, v)
+            modified = True
+            z += 1
+            if self.bounds.contains(*rkv_t):
+                self.q_hist.append(1.0)
+                self.edge_streak[:] = 0
+                return self._output(tma, tc, oc, False, True, phase, 1.0)
+        self.q_hist.append(q)
+        self.edge_streak = streak
+        return self._output(ctma, tc, oc, True, modified, phase, q)
