@@ -36,7 +36,7 @@ Cycle at t (001 figure 7):
     are told apart by the elementary tracks' own crossing management);
   module 64 + 65: per altitude band, localisation from the contributing updated
     elementary tracks, then the EKF update with [49]-[50] of each component; new
-    weights, pruning and merging of the bands (common.radar.global_mixture);
+    weights, pruning and merging of the bands (common.radar.global_filter);
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
@@ -44,24 +44,9 @@ Cycle at t (001 figure 7):
     or missed, e.g. crossing.toml t = 52, 59) is predicted only but keeps its status:
     001 puts a track in pure prediction only when it has no contributor (there the
     contributors' estimates would still update it).
-Decorrelation (complement of 001, common.radar.decorrelation): modules 64-65 do not take the
-elementary tracks' filtered estimates as measurements (their errors are correlated in
-time, which made the global covariance far too small), but the equivalent measurement
-of the scan recovered from two successive reports of each elementary track, i.e. the
-fused plot that track used. A contributing elementary track without a measurement this
-scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
-Module 63 ([48]) and module 62 keep using the estimates (common.radar.global_assoc says why).
-Module 64 during tracking is an iterated posterior linearisation started at each
-band's prediction (common.radar.localisation.linearised_position, stated deviation: the
-per-scan block mean is biased for poorly observed altitudes); a band whose residuals
-fail the chi-square test (gate_prob) gets no position update this scan, and a track
-none of whose bands passes is not located. The likelihood of the scan's ranges and
-azimuths under each band's prediction weighs the bands (common.radar.global_mixture).
-State (complement of 001 [44]-[46], stated): every track is a Gaussian sum over
-altitude bands x motion models (common.radar.global_mixture; common.radar.global_init.
-altitude_bands says why a low target needs it: crossing.toml's 1.5 km target had a
-mean NEES of 9.4 over 16 seeds with one Gaussian, 2.9 with the bands). x and P of a
-track are the moments of its mixture.
+Decorrelation (equivalent measurements), module 64 per band and the mixture state:
+common.radar.global_filter. Module 63 ([48]) and module 62 use the elementary tracks'
+estimates (common.radar.global_assoc says why).
 Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
 model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
 (q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
@@ -73,8 +58,7 @@ target and follow a 2 deg/s turn (two_targets.toml): a Q sized for the turn made
 straight target's covariance far too large (mean NEES 1.88), and the adaptive q used
 before (continuous noise level adjustment) reacted after the gate [48] had already
 dissociated the bases at the turn's onset (a new track took over, NEES bursts of 100-
-450). When the crossing test of 004 scales the gain by alpha, the likelihood is
-tempered by the same alpha (alpha = 0, memory mode: probabilities only predicted).
+450).
 """
 
 from __future__ import annotations
@@ -85,7 +69,6 @@ from typing import Any
 
 import numpy as np
 
-from common.radar import global_ekf, global_mixture
 from common.core import imm
 from common.radar.bistatic import POS, BaseGeometry
 from common.core.crossing import CrossingManager, CrossingParams
@@ -94,8 +77,8 @@ from common.radar.elementary import ElementaryParams
 from common.core.gating import chi2_gate
 from common.radar.global_assoc import (YR, ETrackSet, component_gamma, gated_component_pairs,
                                  gated_pairs, resolve)
+from common.radar.global_filter import MixtureFilter
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
-from common.radar.localisation import Constraints, linearised_position
 from common.core.track_table import STATUS_NAME, Status, TrackTable
 
 PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
@@ -195,20 +178,15 @@ class GlobalFusion:
         if len(bases) < 2 or np.ptp(self.rx, axis=0).max() > 1e-6:
             raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
         B = len(bases)
-        self.A = self.p.alt_bands
-        K = 2 * self.A  # components: altitude bands x motion models (common.radar.global_mixture)
+        self.filter = MixtureFilter(self.p, self.tx, self.rx)
+        K = 2 * self.filter.A  # components: altitude bands x motion models (global_filter)
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "confirmed": ((), bool),
                                           "ambiguous": ((), bool),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
                                           "mu": ((K,), float)})
-        self.q_models = np.array([self.p.q, self.p.q_manoeuvre])
-        self.sojourn = np.array([self.p.sojourn_quiet, self.p.sojourn_manoeuvre])
-        self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
-        self.chi2_gate = np.array([np.inf] + [chi2_gate(self.p.gate_prob, k)
-                                              for k in range(1, 2 * B + 1)])
         self.az_gate = np.radians(self.p.az_gate_deg)
         self.pending: dict[float, dict[int, dict[str, Any]]] = {}
         self.t_last: float | None = None
@@ -241,7 +219,7 @@ class GlobalFusion:
         reported[list(msgs)] = True
         tab = self.table
         live = tab.active_indices()
-        x, P, xm, Pm, c = self._predict(t, live)
+        x, P, xm, Pm, c = self.filter.predict(tab, t, live)  # [55]-[56]
         row = self._confirm(live, (c, xm, Pm), E, reported)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
@@ -259,19 +237,6 @@ class GlobalFusion:
             self._extend(new, (c, xm, Pm), E, reported, free, row)
         self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
         return self._manage(t, E, row)
-
-    def _predict(self, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
-        """IMM mixing and model-matched prediction [55]-[56] of every component of the
-        live tracks to t: (x, P) combined, (xm, Pm) per component and the predicted
-        weights c, as arrays over all slots (rows of other slots: copies of the table)."""
-        tab = self.table
-        x, P, xm, Pm, c = tab.x.copy(), tab.P.copy(), tab.xm.copy(), tab.Pm.copy(), tab.mu.copy()
-        if live.size:
-            c[live], xm[live], Pm[live] = global_mixture.predict(
-                tab.mu[live], tab.xm[live], tab.Pm[live], t - tab.t_last[live], self.A,
-                self.sojourn, self.q_models, self.p.q_z)
-            x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
-        return x, P, xm, Pm, c
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
                  E: ETrackSet, reported: np.ndarray) -> np.ndarray:
@@ -356,11 +321,7 @@ class GlobalFusion:
         used = cand.rows[win]
         xb, Pb, wb = altitude_bands(cand.x[win][:, POS], E.y, E.R, E.base, used,
                                     self.tx, self.rx, self.init_p)
-        M = self.mu0.size
-        xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
-        mu = global_mixture.prune_merge((wb[:, :, None] * self.mu0).reshape(win.size, -1),
-                                        xm, Pm, self.A, self.p.band_prune_init, self.p.band_merge,
-                                        self.p.band_linear, self.rx[0, 2])
+        xm, Pm, mu = self.filter.initial(xb, Pb, wb)
         tab.xm[slots], tab.Pm[slots], tab.mu[slots] = xm, Pm, mu
         tab.x[slots], tab.P[slots] = imm.combine(mu, xm, Pm)
         tab.t_last[slots] = t
@@ -375,60 +336,21 @@ class GlobalFusion:
                 row: np.ndarray) -> None:
         """Localisation (64) per altitude band, crossing test (004) on the combined
         prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
-        `_predict`), new weights, pruning and merging (common.radar.global_mixture) at t."""
+        MixtureFilter.predict), new weights, pruning and merging at t (global_filter);
+        status of the tracks."""
         tab = self.table
         r = row[live]
         active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
         n_act = active.sum(1)
         multi, single = n_act >= 2, n_act == 1
-        n, A = live.size, self.A
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
-        M = cl.shape[1] // A
-        band = np.arange(cl.shape[1]) // M
-        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, A)
-        bpos, bpost = np.full((n, A, 3), np.nan), np.full((n, A, 3), np.nan)
-        bcov = np.full((n, A, 3, 3), np.nan)
-        bll, bok = np.zeros((n, A)), np.zeros((n, A), dtype=bool)
-        ti, ai = np.nonzero(multi[:, None] & (mass > 0))
-        if ti.size:
-            rm = r[ti]
-            sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
-            cons = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[ti],
-                               self.tx, self.rx)
-            zm, Rm, chi2, xpost, ll = linearised_position(  # module 64, per band
-                xb[ti, ai][:, POS], Pb[ti, ai][:, POS][:, :, POS], cons, self.p.z_min)
-            bpos[ti, ai], bcov[ti, ai], bpost[ti, ai], bll[ti, ai] = zm, Rm, xpost, ll
-            bok[ti, ai] = chi2 <= self.chi2_gate[2 * active[ti].sum(1)]
-        located = bok.any(axis=1)
-        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
-        post = np.where(located[:, None], bpost[np.arange(n), best], np.nan)
+        fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
+        located = fix.located
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
-                                        P[live][:, PLAN][:, :, PLAN], z_meas=post[:, :2],
+                                        P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
                                         n_meas=int(located.sum()))
         tab.ambiguous[live] = amb
-        infl = self.p.meas_inflation
-        ll_comp = np.zeros(cl.shape)
-        mu = cl.copy()
-        ti, ki = np.nonzero(bok[:, band] & (cl > 0))
-        if ti.size:
-            rl, ai = r[ti], band[ki]
-            xl[ti, ki], Pl[ti, ki], ll = global_ekf.fused_update(  # module 65
-                xl[ti, ki], Pl[ti, ki], bpos[ti, ai], infl * bcov[ti, ai], E.z[rl, 1],
-                infl * E.Rz[rl, 1, 1], active[ti], self.tx, self.rx, alpha[ti])
-            ll_comp[ti, ki] = alpha[ti] * ll
-            mu[located] = global_mixture.reweight(cl[located], alpha[located, None] * bll[located],
-                                                  ll_comp[located], A)
-        ti, ki = np.nonzero(single[:, None] & (cl > 0))
-        if ti.size:
-            rs = r[ti][active[ti]]
-            bs = np.nonzero(active[ti])[1]
-            xl[ti, ki], Pl[ti, ki], ll = global_ekf.single_base_update(
-                xl[ti, ki], Pl[ti, ki], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs],
-                alpha[ti])
-            ll_comp[ti, ki] = alpha[ti] * ll
-            mu[single] = imm.probabilities(cl[single], ll_comp[single])
-        mu = global_mixture.prune_merge(mu, xl, Pl, A, self.p.band_prune, self.p.band_merge,
-                                       self.p.band_linear, self.rx[0, 2])
+        mu = self.filter.update(xl, Pl, cl, fix, single, r, active, E, alpha)  # module 65
         tab.xm[live], tab.Pm[live], tab.mu[live] = xl, Pl, mu
         tab.x[live], tab.P[live] = imm.combine(mu, xl, Pl)
         tab.t_last[live] = t

@@ -1,0 +1,158 @@
+"""The Gaussian-sum filter of the global tracks: 001 [55]-[56] (IMM prediction), module 64
+(localisation) and module 65 ([49]-[50] EKF update) per mixture component.
+
+State (complement of 001 [44]-[46], stated): every track is a Gaussian sum over
+altitude bands x motion models (common.radar.global_mixture; common.radar.global_init.
+altitude_bands says why a low target needs it: crossing.toml's 1.5 km target had a
+mean NEES of 9.4 over 16 seeds with one Gaussian, 2.9 with the bands). x and P of a
+track are the moments of its mixture. The motion models and their mixing are those of
+the module doc of common.radar.global_fusion (IMM).
+Decorrelation (complement of 001, common.radar.decorrelation): modules 64-65 do not take the
+elementary tracks' filtered estimates as measurements (their errors are correlated in
+time, which made the global covariance far too small), but the equivalent measurement
+of the scan recovered from two successive reports of each elementary track, i.e. the
+fused plot that track used. A contributing elementary track without a measurement this
+scan (not updated, ambiguous, or not recoverable) keeps its membership but adds nothing.
+Module 64 during tracking is an iterated posterior linearisation started at each
+band's prediction (common.radar.localisation.linearised_position, stated deviation: the
+per-scan block mean is biased for poorly observed altitudes); a band whose residuals
+fail the chi-square test (gate_prob) gets no position update this scan, and a track
+none of whose bands passes is not located. The likelihood of the scan's ranges and
+azimuths under each band's prediction weighs the bands (common.radar.global_mixture).
+When the crossing test of 004 scales the gain by alpha, the likelihood is tempered by
+the same alpha (alpha = 0, memory mode: probabilities only predicted).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from common.core import imm
+from common.core.gating import chi2_gate
+from common.core.track_table import TrackTable
+from common.radar import global_ekf, global_mixture
+from common.radar.bistatic import POS
+from common.radar.global_assoc import ETrackSet
+from common.radar.localisation import Constraints, linearised_position
+
+if TYPE_CHECKING:
+    from common.radar.global_fusion import FusionParams
+
+
+@dataclass(frozen=True)
+class BandFixes:
+    """Module 64 per track and altitude band (n, A): located position (n, A, 3), its
+    covariance (n, A, 3, 3), log-likelihood of the scan under the band, passed the
+    chi-square test; post: posterior position (n, 3) of the heaviest band that passed
+    (nan where none did)."""
+
+    pos: np.ndarray
+    cov: np.ndarray
+    ll: np.ndarray
+    ok: np.ndarray
+    post: np.ndarray
+
+    @property
+    def located(self) -> np.ndarray:
+        """Tracks (n,) with at least one band that passed."""
+        return self.ok.any(axis=1)
+
+
+class MixtureFilter:
+    """Prediction and update of the mixtures (bands x models) of the global tracks; the
+    rows of a `TrackTable` hold them (fields xm, Pm, mu, see common.radar.global_fusion)."""
+
+    def __init__(self, p: FusionParams, tx: np.ndarray, rx: np.ndarray) -> None:
+        self.p, self.tx, self.rx = p, tx, rx
+        self.A = p.alt_bands
+        self.q_models = np.array([p.q, p.q_manoeuvre])
+        self.sojourn = np.array([p.sojourn_quiet, p.sojourn_manoeuvre])
+        self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
+        self.chi2_gate = np.array([np.inf] + [chi2_gate(p.gate_prob, k)
+                                              for k in range(1, 2 * len(tx) + 1)])
+
+    def predict(self, tab: TrackTable, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
+        """IMM mixing and model-matched prediction [55]-[56] of every component of the
+        live tracks to t: (x, P) combined, (xm, Pm) per component and the predicted
+        weights c, as arrays over all slots (rows of other slots: copies of the table)."""
+        x, P, xm, Pm, c = tab.x.copy(), tab.P.copy(), tab.xm.copy(), tab.Pm.copy(), tab.mu.copy()
+        if live.size:
+            c[live], xm[live], Pm[live] = global_mixture.predict(
+                tab.mu[live], tab.xm[live], tab.Pm[live], t - tab.t_last[live], self.A,
+                self.sojourn, self.q_models, self.p.q_z)
+            x[live], P[live] = imm.combine(c[live], xm[live], Pm[live])
+        return x, P, xm, Pm, c
+
+    def initial(self, xb: np.ndarray, Pb: np.ndarray, wb: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mixtures (xm, Pm, mu) of new tracks from their altitude bands (means, covariances,
+        weights: global_init.altitude_bands), every band in every model with the chain's
+        stationary probabilities, pruned (band_prune_init) and merged."""
+        M = self.mu0.size
+        xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
+        mu = global_mixture.prune_merge((wb[:, :, None] * self.mu0).reshape(wb.shape[0], -1),
+                                        xm, Pm, self.A, self.p.band_prune_init, self.p.band_merge,
+                                        self.p.band_linear, self.rx[0, 2])
+        return xm, Pm, mu
+
+    def locate(self, xl: np.ndarray, Pl: np.ndarray, cl: np.ndarray, multi: np.ndarray,
+               r: np.ndarray, active: np.ndarray, E: ETrackSet) -> BandFixes:
+        """Module 64 per altitude band of the tracks `multi` (>= 2 active contributors):
+        components (xl, Pl, cl) of n tracks, r (n, B) their rows of E, active (n, B) the
+        contributors with an equivalent measurement."""
+        n, A = xl.shape[0], self.A
+        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, A)
+        bpos, bpost = np.full((n, A, 3), np.nan), np.full((n, A, 3), np.nan)
+        bcov = np.full((n, A, 3, 3), np.nan)
+        bll, bok = np.zeros((n, A)), np.zeros((n, A), dtype=bool)
+        ti, ai = np.nonzero(multi[:, None] & (mass > 0))
+        if ti.size:
+            rm = r[ti]
+            sig = np.sqrt(np.diagonal(E.Rz[rm], axis1=2, axis2=3))
+            cons = Constraints(E.z[rm, 0], sig[..., 0], E.z[rm, 2], sig[..., 2], active[ti],
+                               self.tx, self.rx)
+            zm, Rm, chi2, xpost, ll = linearised_position(  # module 64, per band
+                xb[ti, ai][:, POS], Pb[ti, ai][:, POS][:, :, POS], cons, self.p.z_min)
+            bpos[ti, ai], bcov[ti, ai], bpost[ti, ai], bll[ti, ai] = zm, Rm, xpost, ll
+            bok[ti, ai] = chi2 <= self.chi2_gate[2 * active[ti].sum(1)]
+        located = bok.any(axis=1)
+        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
+        post = np.where(located[:, None], bpost[np.arange(n), best], np.nan)
+        return BandFixes(bpos, bcov, bll, bok, post)
+
+    def update(self, xl: np.ndarray, Pl: np.ndarray, cl: np.ndarray, fix: BandFixes,
+               single: np.ndarray, r: np.ndarray, active: np.ndarray, E: ETrackSet,
+               alpha: np.ndarray) -> np.ndarray:
+        """Module 65: EKF update of every component (xl, Pl updated in place) of the
+        located tracks (fused, [49]-[50]) and of the tracks `single` (one active
+        contributor), with the gains scaled by alpha (004); returns the new weights,
+        pruned and merged (common.radar.global_mixture)."""
+        A = self.A
+        band = np.arange(cl.shape[1]) // (cl.shape[1] // A)
+        located = fix.located
+        infl = self.p.meas_inflation
+        ll_comp = np.zeros(cl.shape)
+        mu = cl.copy()
+        ti, ki = np.nonzero(fix.ok[:, band] & (cl > 0))
+        if ti.size:
+            rl, ai = r[ti], band[ki]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.fused_update(  # module 65
+                xl[ti, ki], Pl[ti, ki], fix.pos[ti, ai], infl * fix.cov[ti, ai], E.z[rl, 1],
+                infl * E.Rz[rl, 1, 1], active[ti], self.tx, self.rx, alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[located] = global_mixture.reweight(cl[located], alpha[located, None] * fix.ll[located],
+                                                  ll_comp[located], A)
+        ti, ki = np.nonzero(single[:, None] & (cl > 0))
+        if ti.size:
+            rs = r[ti][active[ti]]
+            bs = np.nonzero(active[ti])[1]
+            xl[ti, ki], Pl[ti, ki], ll = global_ekf.single_base_update(
+                xl[ti, ki], Pl[ti, ki], E.z[rs], infl * E.Rz[rs], self.tx[bs], self.rx[bs],
+                alpha[ti])
+            ll_comp[ti, ki] = alpha[ti] * ll
+            mu[single] = imm.probabilities(cl[single], ll_comp[single])
+        return global_mixture.prune_merge(mu, xl, Pl, A, self.p.band_prune, self.p.band_merge,
+                                          self.p.band_linear, self.rx[0, 2])
