@@ -1,0 +1,127 @@
+"""Load benchmark: the dense scenario's radar chain at 10x its real-time rate for 60 s of
+wall time; no scan may be lost; end-to-end and per-service latencies.
+
+Real processes: a ``pfusion router``, the radar services of ``scenarios/dense.toml`` (120
+aircraft, 4 bases with 15 channels in all: 4 channel plotters, 4 elementary trackers,
+global fusion) and ``pfusion simulate --speed X``, each a child process on a free loopback
+port (``tests.harness.Deployment``). 60 s at 10x are 600 scans of 1 s: the scenario's 120 s
+back to back five times (``--repeat 5``, seeds 1-5), so the air picture stays dense.
+
+Lost: a scan time of the input missing from any base's fused plots or elementary tracks
+or from the global tracks, a sample missed by the stamps (the services' ``missed``
+counters and this collector's) or an input rejected. Latency, from this collector's
+reception wall times (one clock): plots -> global tracks = arrival of a scan's global
+tracks - arrival of its first channel plots (the simulator publishes a scan's plots at
+once); per stage, the plotter (first plots -> fused plots of its base), the elementary
+tracker (fused -> elementary tracks) and global fusion (last base's elementary tracks ->
+global tracks); and the services' own handling time per input (their p50/p99 counters).
+Kept up: the last scan's global tracks arrived within 1 s + 5 % of the input's wall
+duration after its first plots (no backlog piled up).
+Exit code 1 if anything was lost or the chain did not keep up.
+
+Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from soak import REPO, Observer, counters_table, failures, start_chain, wait_counters
+from tests.harness import Deployment
+
+DENSE = REPO / "scenarios" / "dense.toml"
+RUN_SCANS = 120  # dense.toml: 120 x 1 s
+
+
+def pct(x: list[float]) -> str:
+    """'p50 / p99' in ms."""
+    a = 1e3 * np.asarray(x)
+    return f"{np.percentile(a, 50):8.1f} / {np.percentile(a, 99):8.1f}" if a.size else "       - /        -"
+
+
+def load(speed: float, seconds: float, seed: int) -> int:
+    """Run the chain at ``speed`` x real time for ``seconds`` of wall time; print the
+    tables; return the exit code."""
+    scans = int(round(speed * seconds))
+    repeat = -(-scans // RUN_SCANS)  # whole runs of the scenario: seconds rounded up
+    with tempfile.TemporaryDirectory() as tmp, Deployment(Path(tmp)) as d:
+        pids = start_chain(d, DENSE)
+        services = len(pids) - 1
+        obs = Observer(d, ["radar/plots/**", "radar/fused/*", "radar/etracks/*", "radar/gtracks"])
+        sim = d.start("simulate", "simulate", "--config", str(DENSE), "--scenario", str(DENSE),
+                      "--seed", str(seed), "--speed", repr(speed), "--scans", str(min(scans, RUN_SCANS)),
+                      "--repeat", str(repeat), "--wait-alive", "test/collector")
+        while sim.alive():
+            obs.drain(0.1)
+        if sim.proc.returncode != 0:
+            raise RuntimeError(f"simulator exited with {sim.proc.returncode}")
+        plots = {}
+        for suffix, by_t in obs.arrivals.items():
+            if suffix.startswith("radar/plots/"):
+                for t, at in by_t.items():
+                    plots[t] = min(plots.get(t, np.inf), *at)
+        expected = sorted(plots)
+        t_last = expected[-1]
+        deadline = time.monotonic() + 120.0
+        while t_last not in obs.scans("radar/gtracks") and time.monotonic() < deadline:
+            obs.drain(0.1)
+        time.sleep(2.0)  # a late message of another key
+        obs.drain()
+        wait_counters(obs, services, time.monotonic())
+        bases = sorted({s.rsplit("/", 1)[-1] for s in obs.arrivals if s.startswith("radar/fused/")})
+        lost, missed, rejected = failures(obs, expected, "radar/gtracks")
+        for stage in ("fused", "etracks"):
+            for b in bases:
+                lost += len(set(expected) - obs.scans(f"radar/{stage}/{b}"))
+        obs.close()
+
+    gt = {t: min(a) for t, a in obs.arrivals["radar/gtracks"].items() if t in plots}
+    end_to_end = [gt[t] - plots[t] for t in expected if t in gt]
+    plotter = [min(obs.arrivals[f"radar/fused/{b}"][t]) - plots[t] for b in bases for t in expected
+               if t in obs.arrivals.get(f"radar/fused/{b}", {})]
+    tracker = [min(obs.arrivals[f"radar/etracks/{b}"][t]) - min(obs.arrivals[f"radar/fused/{b}"][t])
+               for b in bases for t in expected
+               if t in obs.arrivals.get(f"radar/etracks/{b}", {}) and t in obs.arrivals.get(f"radar/fused/{b}", {})]
+    fusion = [gt[t] - max(min(obs.arrivals[f"radar/etracks/{b}"][t]) for b in bases) for t in expected
+              if t in gt and all(t in obs.arrivals.get(f"radar/etracks/{b}", {}) for b in bases)]
+    wall_in = plots[t_last] - plots[expected[0]]
+    backlog = gt.get(t_last, np.inf) - plots[t_last]
+    kept_up = backlog <= 1.0 + 0.05 * wall_in
+    print(f"load: {DENSE.name} at {speed:g}x real time: {len(expected)} scans published in {wall_in:.1f} s "
+          f"wall = {(len(expected) - 1) / wall_in:.1f} scans/s (seed {seed}, {repeat} runs of the scenario)")
+    print(f"{'latency, ms':<44} {'p50 /      p99':>19}")
+    print(f"{'plots -> global tracks (end to end)':<44} {pct(end_to_end)}")
+    print(f"{'  channel plotter: plots -> fused':<44} {pct(plotter)}")
+    print(f"{'  elementary tracker: fused -> etracks':<44} {pct(tracker)}")
+    print(f"{'  global fusion: last etracks -> gtracks':<44} {pct(fusion)}")
+    print("\n".join(counters_table(obs)))
+    print("(out counts the counters published every 2 s too; p50/p99: handling time per input)")
+    print(f"last scan's global tracks {backlog:.2f} s after its plots: "
+          f"{'kept up' if kept_up else 'DID NOT KEEP UP (backlog)'}")
+    print(f"lost scans {lost}, missed samples {missed}, rejected inputs {rejected}")
+    if lost or missed or rejected:
+        print("FAIL: scans lost, samples missed or inputs rejected")
+    if not kept_up:
+        print(f"FAIL: the chain did not keep up with {speed:g}x")
+    return 1 if lost or missed or rejected or not kept_up else 0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--speed", type=float, default=10.0, help="times the scenario's real-time rate")
+    ap.add_argument("--seconds", type=float, default=60.0, help="wall time of the input")
+    ap.add_argument("--seed", type=int, default=1)
+    args = ap.parse_args()
+    if args.speed <= 0 or args.speed * args.seconds < 2:
+        ap.error("--speed must be > 0 and --speed x --seconds >= 2 scans")
+    return load(args.speed, args.seconds, args.seed)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
