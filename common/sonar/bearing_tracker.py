@@ -10,7 +10,7 @@ time only:
   3. global nearest neighbour on the gated d^2 (000: GNN cost matrix);
   4. seed 004 crossing management on the confirmed tracks: alpha as gain weight; a
      track leaving the ambiguity keeps its detection only if no other confirmed track's
-     prediction is nearer to it (deviation, see `_exit_pairs`);
+     prediction is nearer to it (deviation; common.sonar.bearing_crossing);
   5. Kalman update with the Joseph-form covariance (000 P(k/k));
   6. track quality L(k) = L(k-1) + dL (000 claim 4), ln(1 - P_D) for a miss;
      tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2); confirmed
@@ -18,8 +18,8 @@ time only:
   7. every unassociated detection opens a tentative track, x(1) = H' z, P(1) = P0,
      L(1) = 0 (000 initialisation);
   8. narrowband: multi-line tracks (000 claims 12-13, common.sonar.multiline);
-  9. the bearing register (000 register 13): estimated bearings of every track from its
-     first detection, with the own-ship position, for TMA.
+  9. the bearing register (000 register 13, common.sonar.bearing_history): estimated
+     bearings of every track from its first detection, with the own-ship position, for TMA.
 
 Amplitude is tracked as a level in dB, a = 10 log10(amp) (000: "la amplitud o el
 nivel"), so that the simulator's log-normal amplitude noise is additive; the linear
@@ -30,13 +30,15 @@ amplitude enters the linear-array sigma law. Bearings wrap at 0 / 2 pi everywher
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
 from common.core.assignment import gnn
+from common.sonar.bearing_crossing import BearingCrossing
+from common.sonar.bearing_history import BearingHistory
 from common.sonar.bearing_model import (
     gate_value,
     linear_array_sigma,
@@ -45,7 +47,7 @@ from common.sonar.bearing_model import (
     quality_increment,
     thresholds,
 )
-from common.core.crossing import CrossingManager, CrossingParams, wrapped_diff
+from common.core.crossing import CrossingParams
 from common.core.kalman import predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.multiline import NEW, MultiLineGrouper, group_means
@@ -126,81 +128,6 @@ class Cycle:
     multiline: list[MultiLineTrack]
 
 
-
-HISTORY_COLUMNS = ("t", "brg", "sbrg", "own_x", "own_y")
-
-
-class BearingHistory:
-    """Bearing register (000 register 13): rows (t, brg, sbrg, own_x, own_y) appended
-    once per cycle for all live tracks in one block, keyed by a never-recycled serial
-    number (uid). A deleted confirmed track stays queryable under its number until the
-    number is reused or `keep_deleted` later confirmed tracks were deleted; rows nobody
-    can query any more are dropped by an amortised compaction."""
-
-    def __init__(self, keep_deleted: int = 64, min_compact_rows: int = 100_000) -> None:
-        self.keep_deleted = keep_deleted
-        self.min_compact_rows = min_compact_rows
-        self._uid: list[np.ndarray] = []
-        self._rows: list[np.ndarray] = []
-        self._n = 0
-        self._compact_at = min_compact_rows
-        self.retired_ids = np.zeros(0, dtype=np.int64)
-        self.retired_uids = np.zeros(0, dtype=np.int64)
-
-    def __len__(self) -> int:
-        return self._n
-
-    def append(self, t: float, uid: np.ndarray, brg: np.ndarray, sbrg: np.ndarray,
-               own_x: float, own_y: float) -> None:
-        """Log one cycle: one row per live track."""
-        k = uid.size
-        block = np.column_stack([np.full(k, t), brg, sbrg, np.full(k, own_x), np.full(k, own_y)])
-        self._uid.append(np.asarray(uid, dtype=np.int64))
-        self._rows.append(block)
-        self._n += k
-
-    def retire(self, ids: np.ndarray, uids: np.ndarray) -> None:
-        """Keep the history of deleted confirmed tracks queryable under their numbers."""
-        self.release(ids)
-        self.retired_ids = np.concatenate([self.retired_ids, ids])[-self.keep_deleted:]
-        self.retired_uids = np.concatenate([self.retired_uids, uids])[-self.keep_deleted:]
-
-    def release(self, ids: np.ndarray) -> None:
-        """Track numbers reused by new tracks: their retired history is no longer served."""
-        keep = ~np.isin(self.retired_ids, ids)
-        self.retired_ids, self.retired_uids = self.retired_ids[keep], self.retired_uids[keep]
-
-    def retired_uid(self, track_id: int) -> int | None:
-        """uid of the deleted confirmed track that had this number, if still kept."""
-        hit = np.flatnonzero(self.retired_ids == track_id)
-        return int(self.retired_uids[hit[-1]]) if hit.size else None
-
-    def _consolidate(self) -> tuple[np.ndarray, np.ndarray]:
-        if len(self._rows) > 1:
-            self._uid = [np.concatenate(self._uid)]
-            self._rows = [np.concatenate(self._rows)]
-        if not self._rows:
-            return np.zeros(0, dtype=np.int64), np.zeros((0, len(HISTORY_COLUMNS)))
-        return self._uid[0], self._rows[0]
-
-    def rows(self, uid: int) -> dict[str, np.ndarray]:
-        """The logged columns of one track, in time order."""
-        uids, rows = self._consolidate()
-        sel = rows[uids == uid]
-        return {c: sel[:, i] for i, c in enumerate(HISTORY_COLUMNS)}
-
-    def maybe_compact(self, live_uids: np.ndarray) -> None:
-        """Drop rows of tracks that are neither live nor retired, once the log has
-        doubled since the last compaction (amortised O(1) per row)."""
-        if self._n < self._compact_at:
-            return
-        uids, rows = self._consolidate()
-        keep = np.isin(uids, np.concatenate([live_uids, self.retired_uids]))
-        self._uid, self._rows = [uids[keep]], [rows[keep]]
-        self._n = int(keep.sum())
-        self._compact_at = max(2 * self._n, self.min_compact_rows)
-
-
 class BearingTracker:
     """Seed 000 single-hypothesis bearing tracker for one array (see module docstring)."""
 
@@ -226,13 +153,9 @@ class BearingTracker:
             extra={"L_max": ((), np.float64), "uid": ((), np.int64),
                    "ml": ((), np.int64), "ambiguous": ((), np.bool_)},
         )
-        self.crossing: CrossingManager | None = None
-        self._cross_dims = [0, 2] if self.narrowband else [0]
-        if p.crossing:
-            cp = crossing or CrossingParams()
-            if self.narrowband:  # seed 004 c: volume of the (bearing, frequency) space
-                cp = replace(cp, volume=2.0 * math.pi * (p.band_hz[1] - p.band_hz[0]))
-            self.crossing = CrossingManager(cp)
+        self.crossing = (BearingCrossing(crossing or CrossingParams(), self.H,
+                                         p.band_hz if self.narrowband else None)
+                         if p.crossing else None)
         self.multiline = (
             MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
             if self.narrowband else None
@@ -305,8 +228,15 @@ class BearingTracker:
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
-        alpha, ambiguous = self._crossing(t, idx, x, P, z, rows, cols_, heading, n_det)
-        keep = self._exit_pairs(idx, x, z, Rd, rows, cols_, ambiguous)
+        alpha, ambiguous = np.ones(idx.size), np.zeros(idx.size, dtype=bool)
+        keep = np.ones(rows.size, dtype=bool)
+        if self.crossing is not None:  # seed 004 (common.sonar.bearing_crossing)
+            conf = tab.status[idx] == Status.CONFIRMED
+            alpha, ambiguous = self.crossing.gains(
+                t, tab.id[idx], conf, x, z, rows, cols_,
+                lambda zp: self._R_diag(zp[:, 0], zp[:, 1], heading), n_det)
+            keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
+                                            rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
         R = _diag(Rd[cols_])
 
@@ -383,65 +313,6 @@ class BearingTracker:
         rows, cols = gnn(cost)  # 000 GNN on the squared statistical distances
         k = pair[rows, cols]
         return rows, cols, y[k], detS[k], d2[k], gated
-
-    def _crossing(
-        self, t: float, idx: np.ndarray, x: np.ndarray, P: np.ndarray, z: np.ndarray,
-        rows: np.ndarray, cols: np.ndarray, heading: float, n_det: int,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Seed 004 on the confirmed tracks' predicted bearings (and frequencies):
-        alpha (N,) gain weights and ambiguity flags. Deviation: tentative tracks are
-        left out (alpha = 1, not ambiguous): a clutter track next to a confirmed track
-        would otherwise freeze it in memory mode."""
-        N = idx.size
-        alpha, amb = np.ones(N), np.zeros(N, dtype=bool)
-        conf = np.flatnonzero(self.table.status[idx] == Status.CONFIRMED)
-        if self.crossing is None or conf.size == 0:
-            return alpha, amb
-        dims = self._cross_dims
-        zp = (x[conf] @ self.H.T)
-        Rp = self._R_diag(zp[:, 0], zp[:, 1], heading)
-        cov = _diag(Rp)[:, dims][:, :, dims]  # 004: g is the measurement noise density
-        zm = np.full((N, self.m), np.nan)
-        zm[rows] = z[cols]
-        a, f = self.crossing.step(
-            t, self.table.id[idx[conf]], zp[:, dims], cov, zm[conf][:, dims], n_det, angle_idx=[0]
-        )
-        alpha[conf], amb[conf] = a, f
-        return alpha, amb
-
-    def _exit_pairs(
-        self, idx: np.ndarray, x: np.ndarray, z: np.ndarray, Rd: np.ndarray,
-        rows: np.ndarray, cols: np.ndarray, ambiguous: np.ndarray,
-    ) -> np.ndarray:
-        """Mask (K,) of the GNN pairs kept for the update. A confirmed track that leaves
-        the ambiguity at this scan (flagged at the previous cycle, not now: the end of
-        the memory mode of 004 claim 5, or claim 6) keeps its detection only if no
-        other confirmed track's prediction is nearer to it, in the measurement noise
-        metric of 004 g on the crossing components; otherwise the scan is a miss for it
-        (no update, dL = ln(1 - P_D)); the detection still opens no track, it lies in a
-        confirmed gate.
-        Deviation (not in 004, which leaves the re-acquisition to the tracker): the
-        track's P has grown by Q over the whole memory mode, so its gate is wide and
-        its first gain near one; with a missed detection of its own target (P_D < 1)
-        GNN hands it the other target's detection (or a clutter detection nearer the
-        other track), which moves it onto the other target in one update. Seen on
-        sonar_cross_1dpm_uneq (both tracks on the weak target, the strong one lost)."""
-        keep = np.ones(rows.size, dtype=bool)
-        if self.crossing is None or rows.size == 0:
-            return keep
-        tab = self.table
-        conf = tab.status[idx] == Status.CONFIRMED
-        leaving = conf[rows] & tab.ambiguous[idx[rows]] & ~ambiguous[rows]
-        if not leaving.any():
-            return keep
-        dims = self._cross_dims
-        zp = (x[conf] @ self.H.T)[:, dims]
-        pos = np.flatnonzero(conf)
-        k = np.flatnonzero(leaving)
-        diff = wrapped_diff(z[cols[k]][:, None, dims], zp[None, :, :], [0])
-        dist = np.sum(diff**2 / Rd[cols[k]][:, None, dims], axis=2)  # (k, confirmed)
-        keep[k] = pos[np.argmin(dist, axis=1)] == rows[k]
-        return keep
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""
