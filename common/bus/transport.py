@@ -23,6 +23,7 @@ from common.core.sequence import SequenceCheck
 
 LOG_EVERY = 1000
 CLOSE_LINGER_S = 0.5
+ROUTER_RETRY = {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2.0}
 
 
 def zenoh_config(
@@ -37,6 +38,8 @@ def zenoh_config(
     c.insert_json5("transport/link/tx/lease", str(lease_ms))
     if mode == "client":
         c.insert_json5("connect/timeout_ms", "-1" if not connect else "10000")
+    if mode == "router":  # a lost router-router session is retried every <= 1 s (docs/deployment.md)
+        c.insert_json5("connect/retry", json.dumps(ROUTER_RETRY))
     return c
 
 
