@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from common.sonar.ctma import Bounds, TmaTracker, solve_ctma
+from common.sonar.ctma import TmaTracker, solve_ctma
+from common.sonar.ctma_bounds import Bounds
 from core import median_ms  # benchmarks/core.py, beside this script
 from common.sonar.tma import solve_tma
 

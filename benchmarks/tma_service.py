@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from common.sonar.ctma import MINIMAL_BOUNDS, Bounds
+from common.sonar.ctma_bounds import MINIMAL_BOUNDS, Bounds
 from common.sonar.tma_manager import TmaManager, TmaParams
 
 N_TRACKS = 50

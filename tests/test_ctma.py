@@ -1,4 +1,4 @@
-"""Tests for common.sonar.ctma (seed 003): CTMA, residual factor, edge checks, correction, convergence."""
+"""Tests for common.sonar.ctma and ctma_bounds (seed 003): CTMA, residual factor, edge checks, correction, convergence."""
 
 from __future__ import annotations
 
@@ -7,18 +7,20 @@ import pytest
 
 from common.sonar.crlb import position_rms_bound
 from common.sonar.ctma import (
-    MINIMAL_BOUNDS,
-    Bounds,
     ConvergenceDetector,
     CtmaConfig,
     TmaTracker,
+    residual_alarm,
+    residual_factor,
+    solve_ctma,
+)
+from common.sonar.ctma_bounds import (
+    MINIMAL_BOUNDS,
+    Bounds,
     edge_flags,
     effective_bounds,
     recentre,
-    residual_alarm,
-    residual_factor,
     rkv,
-    solve_ctma,
     state_bounds,
 )
 from common.sonar.tma import solve_tma

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from common.sonar.ctma import MINIMAL_BOUNDS, TWO_PI, Bounds, CtmaConfig, CycleOutput, TmaTracker
+from common.sonar.ctma import CtmaConfig, CycleOutput, TmaTracker
+from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 
 VERSION = 1
 

@@ -19,7 +19,8 @@ from typing import Any
 from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import Config, ConfigError, section
-from common.sonar.ctma import Bounds, CtmaConfig
+from common.sonar.ctma import CtmaConfig
+from common.sonar.ctma_bounds import Bounds
 from common.bus.service import Rejected, Service
 from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaInputError, TmaManager, TmaParams, make_bounds
 
