@@ -1,4 +1,4 @@
-"""Tests of the scenario simulator (common.sim.scenario / sim_radar / sim_sonar / simulator)."""
+"""Tests of the scenario simulator (common.sim.scenario / mover / sim_radar / sim_sonar / simulator)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import pytest
 from common.wire import protocol
 from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.deploy.config import RadarBase, SonarArray, load
-from common.sim.scenario import Mover, SonarArraySim
+from common.sim.mover import Mover
+from common.sim.scenario import SonarArraySim
 from common.sim.sonar import bearing_sigma
 from common.sim.simulator import load_scenario, run_scenario
 

@@ -23,7 +23,8 @@ import numpy as np
 from common.radar.bistatic import wrap_angle
 from common.deploy.config import ConfigError, RadarBase, SonarArray
 from common.sim.radar import radar_plots
-from common.sim.scenario import Mover, Scenario, load_scenario
+from common.sim.mover import Mover
+from common.sim.scenario import Scenario, load_scenario
 from common.sim.sonar import sonar_detections
 
 __all__ = ["load_scenario", "run_scenario", "scan_times"]
