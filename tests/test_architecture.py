@@ -23,6 +23,7 @@ ALLOWED: dict[str, set[str]] = {
 }
 PURE = {"core", "radar", "sonar", "evaluation", "sim"}
 IO_MODULES = {"zenoh", "socket", "subprocess", "threading", "time", "asyncio"}
+MAX_LINES = 400  # a longer module holds two jobs: split it (docs/architecture.md)
 
 
 def _imports(path: Path) -> list[str]:
@@ -45,6 +46,14 @@ def _modules() -> list[tuple[str, Path]]:
 def test_every_module_sits_in_a_known_package() -> None:
     assert {pkg for pkg, _ in _modules()} == set(ALLOWED)
     assert sorted(p.name for p in COMMON.glob("*.py")) == ["__init__.py", "cli.py"]
+
+
+def test_every_module_is_at_most_400_lines() -> None:
+    sizes = {str(p.relative_to(COMMON.parent)): len(p.read_text().splitlines())
+             for p in sorted(COMMON.rglob("*.py"))}
+    assert len(sizes) > 40  # the walk found the package
+    long = {p: n for p, n in sizes.items() if n > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines (split them by job): {long}"
 
 
 @pytest.mark.parametrize("pkg,path", _modules(), ids=lambda v: str(v).split("common/")[-1])
