@@ -1,0 +1,69 @@
+"""A collector for hosts the test process cannot reach (tests/test_multihost.py): it
+subscribes to key expressions under the root on its host's router and writes every
+sample to stdout as msgpack ``[receive time, router time, key, payload]``.
+
+Receive time: ``time.time()`` in the Zenoh callback. Router time: the sample's Zenoh
+timestamp, which the first router on its path (the publisher's own router) sets when
+the sample enters the network (None if it has none). All namespaces share the kernel's
+clock, so times taken on different hosts compare directly. The collector declares
+``<root>/alive/test/<name>`` once subscribed (the simulators wait for it) and stops on
+SIGTERM.
+
+``python -m tests.remote_collector --connect tcp/127.0.0.1:7447 --name c1 KEYEXPR...``
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import sys
+import time
+
+import msgpack
+import zenoh
+
+from common.bus.transport import open_session, stop_on_signals
+from common.deploy.config import ZenohConfig
+
+Item = tuple[float, float | None, str, bytes]
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("keyexpr", nargs="+")
+    p.add_argument("--connect", required=True)
+    p.add_argument("--name", required=True)
+    p.add_argument("--root", default="pf/v1")
+    args = p.parse_args()
+    stop = stop_on_signals()
+    q: queue.SimpleQueue[Item] = queue.SimpleQueue()
+
+    def on_sample(s: zenoh.Sample) -> None:  # tiny: stamp, copy, enqueue
+        ts = s.timestamp
+        q.put((time.time(), ts.get_time().timestamp() if ts is not None else None,
+               str(s.key_expr), s.payload.to_bytes()))
+
+    out = sys.stdout.buffer
+    with open_session(ZenohConfig([args.connect], [], args.root)) as session:
+        subs = [session.declare_subscriber(f"{args.root}/{k}", on_sample) for k in args.keyexpr]
+        token = session.liveliness().declare_token(f"{args.root}/alive/test/{args.name}")
+        while not stop.is_set():
+            try:
+                item: Item | None = q.get(timeout=0.1)
+            except queue.Empty:
+                continue
+            while item is not None:
+                out.write(msgpack.packb(list(item), use_bin_type=True))
+                try:
+                    item = q.get_nowait()
+                except queue.Empty:
+                    item = None
+            out.flush()
+        token.undeclare()
+        for s in subs:
+            s.undeclare()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
