@@ -99,3 +99,65 @@ def test_cli_exits_2_with_key_named(tmp_path: Path) -> None:
                         "--scenario", str(bad)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2
     assert "radar.base[0].p" in r.stderr
+
+
+@pytest.mark.parametrize("good_id", ["B1", "site.north", "b:1", "é-1", "x" * 60, "a@b"])
+def test_ids_accept_what_a_zenoh_key_chunk_allows(tmp_path: Path, good_id: str) -> None:
+    cfg = load(write(tmp_path, GOOD.replace('id = "b1"', f'id = "{good_id}"')))
+    assert cfg.bases[0].id == good_id
+
+
+@pytest.mark.parametrize("bad_id", ["", "b/1", "b*", "b$1", "b?", "b#1", "@b1", "b 1", "b\\t1"])
+def test_ids_reject_what_a_key_chunk_cannot_hold(tmp_path: Path, bad_id: str) -> None:
+    with pytest.raises(ConfigError, match="Zenoh key chunk") as e:
+        load(write(tmp_path, GOOD.replace('id = "b1"', f'id = "{bad_id}"')))
+    assert e.value.key == "radar.base[0].id"
+    with pytest.raises(ConfigError) as e:
+        load(write(tmp_path, GOOD.replace('"c2"', f'"{bad_id}"')))
+    assert e.value.key == "radar.base[0].channels"
+
+
+SECURE = GOOD + """
+[zenoh.auth]
+credentials = "creds.txt"
+dictionary = "/etc/pfusion/dictionary.txt"
+
+[zenoh.tls]
+root_ca = "pki/ca.pem"
+mtls = true
+
+[[site]]
+id = "rx1"
+bases = ["b1"]
+arrays = ["a1"]
+"""
+
+
+def test_security_tables_and_sites(tmp_path: Path) -> None:
+    cfg = load(write(tmp_path, SECURE))
+    assert cfg.zenoh.auth is not None and cfg.zenoh.tls is not None
+    assert cfg.zenoh.auth.credentials == str(tmp_path / "creds.txt")
+    assert cfg.zenoh.auth.dictionary == "/etc/pfusion/dictionary.txt"
+    assert cfg.zenoh.auth.access_control
+    assert cfg.zenoh.tls.root_ca == str(tmp_path / "pki/ca.pem") and cfg.zenoh.tls.cert == ""
+    assert [(s.id, s.bases, s.arrays) for s in cfg.sites] == [("rx1", ["b1"], ["a1"])]
+    plain = load(write(tmp_path, GOOD))
+    assert plain.zenoh.auth is None and plain.zenoh.tls is None
+    assert [(s.id, s.bases, s.arrays) for s in plain.sites] == [("b1", ["b1"], []),
+                                                                ("a1", [], ["a1"])]
+
+
+@pytest.mark.parametrize("change,key", [
+    (('credentials = "creds.txt"', 'credential = "creds.txt"'), "zenoh.auth.credential"),
+    (('root_ca = "pki/ca.pem"', 'cert = "host.pem"'), "zenoh.tls.root_ca"),
+    (("mtls = true", 'mtls = "yes"'), "zenoh.tls.mtls"),
+    (('bases = ["b1"]', 'bases = ["b9"]'), "site[0].bases"),
+    (('arrays = ["a1"]', 'arrays = "a1"'), "site[0].arrays"),
+    (('id = "rx1"', 'id = "rx/1"'), "site[0].id"),
+    (('id = "rx1"', 'name = "rx1"'), "site[0].name"),
+    (('arrays = ["a1"]', 'arrays = ["a1"]\n[[site]]\nid = "rx2"\nbases = ["b1"]'), "site.bases"),
+])
+def test_security_errors_name_the_key(tmp_path: Path, change: tuple[str, str], key: str) -> None:
+    with pytest.raises(ConfigError) as e:
+        load(write(tmp_path, SECURE.replace(*change)))
+    assert e.value.key == key

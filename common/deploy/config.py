@@ -1,5 +1,6 @@
-"""Deployment configuration: one TOML file describes the sensors, the Zenoh wiring and
-the tracker parameters of a whole deployment (see docs/configuration.md).
+"""Deployment configuration: one TOML file describes the sensors, the Zenoh wiring (and
+its security: [zenoh.auth], [zenoh.tls], [[site]]), and the tracker parameters of a whole
+deployment (see docs/configuration.md and docs/security.md).
 
 Parameter tables (``[radar.tracker]``, ``[sonar.tma]`` ...) are turned into the
 parameter dataclasses that the core modules define, by :func:`section`; an unknown key
@@ -19,7 +20,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-KEY_CHUNK = re.compile(r"^[a-z0-9_-]{1,32}$")
+# A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
+# whitespace and control characters (ids go into command lines and credential files).
+KEY_CHUNK = re.compile(r"^(?!@)[^/*$?#\s\x00-\x1f\x7f]+$")
 ARRAY_KINDS = ("cylindrical", "linear")
 
 T = TypeVar("T")
@@ -34,12 +37,53 @@ class ConfigError(ValueError):
 
 
 @dataclass(frozen=True)
+class AuthConfig:
+    """Zenoh user/password authentication of every process (docs/security.md).
+
+    credentials: file of `user:password` lines, the identities of this host; a process
+        logs in with the line of its identity.
+    dictionary: routers only: file of `user:password` lines of every identity that may
+        connect (Zenoh's `dictionary_file`).
+    access_control: routers apply the access control generated from the deployment
+        (`pfusion acl`): deny by default."""
+
+    credentials: str = ""
+    dictionary: str = ""
+    access_control: bool = True
+
+
+@dataclass(frozen=True)
+class TlsConfig:
+    """TLS on every link (endpoints `tls/host:port`), optionally mutual (docs/security.md).
+
+    root_ca: CA certificate (PEM) that the other side's certificate must chain to.
+    cert, key: this host's certificate and private key (PEM): what its clients present
+        under mutual TLS, and its router's when router_cert is not set.
+    router_cert, router_key: a router's certificate and key (listening, and towards an
+        upstream router); common name = the router's identity (`router-fusion`,
+        `router-<site>`); readable by the router only.
+    mtls: mutual TLS: every client and router presents a certificate of the CA."""
+
+    root_ca: str = ""
+    cert: str = ""
+    key: str = ""
+    router_cert: str = ""
+    router_key: str = ""
+    mtls: bool = False
+
+
+@dataclass(frozen=True)
 class ZenohConfig:
-    """Where a process connects / listens; ``root`` prefixes every data key."""
+    """Where a process connects / listens; ``root`` prefixes every data key. ``auth`` and
+    ``tls`` are the optional security tables; ``identity`` is the Zenoh username of this
+    process (set from the command line, docs/security.md), not a file key."""
 
     connect: list[str] = field(default_factory=lambda: ["tcp/127.0.0.1:7447"])
     listen: list[str] = field(default_factory=list)
     root: str = "pf/v1"
+    auth: AuthConfig | None = None
+    tls: TlsConfig | None = None
+    identity: str | None = None
 
 
 @dataclass(frozen=True)
@@ -63,14 +107,29 @@ class SonarArray:
 
 
 @dataclass(frozen=True)
+class Site:
+    """A receiver site, whose identity `site-<id>` publishes its sensors' feed.
+
+    id: the site's id (a Zenoh key chunk); its identity is `site-<id>`.
+    bases: ids of the [[radar.base]] whose channel plots the site publishes.
+    arrays: ids of the [[sonar.array]] whose detections the site publishes."""
+
+    id: str
+    bases: list[str] = field(default_factory=list)
+    arrays: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
 class Config:
-    """A parsed deployment file; ``doc`` keeps the raw tables for :func:`section`."""
+    """A parsed deployment file; ``doc`` keeps the raw tables for :func:`section`.
+    ``sites`` is [[site]], or one site per base and per array when the file has none."""
 
     zenoh: ZenohConfig
     bases: list[RadarBase]
     arrays: list[SonarArray]
     doc: dict[str, Any]
     path: Path | None = None
+    sites: list[Site] = field(default_factory=list)
 
     def base(self, base_id: str) -> RadarBase:
         for b in self.bases:
@@ -101,10 +160,14 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
     """Validate the deployment part of a parsed TOML document."""
     z = doc.get("zenoh", {})
     _check_table(z, "zenoh")
-    zc = _build(ZenohConfig, z, "zenoh")
+    zc = _build(ZenohConfig, {k: v for k, v in z.items() if k not in ("auth", "tls")}, "zenoh")
     for k in ("connect", "listen"):
         for ep in getattr(zc, k):
             _endpoint(ep, f"zenoh.{k}")
+    zc = dataclasses.replace(zc, auth=_files(AuthConfig, z, "auth", path),
+                             tls=_files(TlsConfig, z, "tls", path))
+    if zc.tls is not None and not zc.tls.root_ca:
+        raise ConfigError("zenoh.tls.root_ca", "missing (the CA that certificates chain to)")
     radar = doc.get("radar", {})
     _check_table(radar, "radar")
     bases = [_radar_base(b, i) for i, b in enumerate(radar.get("base", []))]
@@ -113,7 +176,8 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
     _check_table(sonar, "sonar")
     arrays = [_sonar_array(a, i) for i, a in enumerate(sonar.get("array", []))]
     _unique([a.id for a in arrays], "sonar.array.id")
-    return Config(zc, bases, arrays, doc, path)
+    sites = _sites(doc.get("site"), [b.id for b in bases], [a.id for a in arrays])
+    return Config(zc, bases, arrays, doc, path, sites)
 
 
 def section(cfg: Config, dotted: str, cls: type[T]) -> T:
@@ -148,8 +212,54 @@ def _unique(ids: list[str], key: str) -> None:
 
 def _chunk(v: Any, key: str) -> str:
     if not isinstance(v, str) or not KEY_CHUNK.match(v):
-        raise ConfigError(key, f"{v!r} must be a string of [a-z0-9_-], 1-32 characters")
+        raise ConfigError(key, f"{v!r} must be a non-empty Zenoh key chunk: no / * $ ? #, "
+                               "no whitespace, not starting with @")
     return v
+
+
+def _files(cls: type[T], z: dict[str, Any], name: str, path: Path | None) -> T | None:
+    """Table [zenoh.<name>] as ``cls``, its file paths made relative to the deployment
+    file's directory (None when the table is absent)."""
+    if name not in z:
+        return None
+    _check_table(z[name], f"zenoh.{name}")
+    t = _build(cls, z[name], f"zenoh.{name}")
+    base = path.parent if path is not None else Path(".")
+    return dataclasses.replace(t, **{  # type: ignore[type-var]
+        k: str(base / v) for k, v in dataclasses.asdict(t).items() if isinstance(v, str) and v})
+
+
+def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
+    """[[site]] (each base and array in at most one site), or one site per base and per
+    array (an array named like a base joins that base's site)."""
+    if entries is None:
+        out = {b: Site(b, [b], []) for b in bases}
+        for a in arrays:
+            out.setdefault(a, Site(a, [], [])).arrays.append(a)
+        return list(out.values())
+    if not isinstance(entries, list):
+        raise ConfigError("site", "expected [[site]] tables")
+    sites = []
+    for i, e in enumerate(entries):
+        key = f"site[{i}]"
+        _check_table(e, key)
+        unknown = set(e) - {"id", "bases", "arrays"}
+        if unknown:
+            raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
+        lists = {}
+        for k, known, kind in (("bases", bases, "radar.base"), ("arrays", arrays, "sonar.array")):
+            v = e.get(k, [])
+            if not isinstance(v, list):
+                raise ConfigError(f"{key}.{k}", f"must be a list of [[{kind}]] ids")
+            for x in v:
+                if x not in known:
+                    raise ConfigError(f"{key}.{k}", f"no [[{kind}]] with id {x!r}")
+            lists[k] = list(v)
+        sites.append(Site(_chunk(e.get("id"), f"{key}.id"), lists["bases"], lists["arrays"]))
+    _unique([s.id for s in sites], "site.id")
+    _unique([b for s in sites for b in s.bases], "site.bases")
+    _unique([a for s in sites for a in s.arrays], "site.arrays")
+    return sites
 
 
 def _point(v: Any, key: str) -> np.ndarray:

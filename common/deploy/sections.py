@@ -10,7 +10,7 @@ import typing
 from typing import Any
 
 from common.sonar.bearing_tracker import TrackerParams
-from common.deploy.config import Config, ConfigError, section
+from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
 from common.core.crossing import CrossingParams
 from common.sonar.ctma import CtmaConfig
 from common.radar.elementary import ElementaryParams, RadarCrossingParams
@@ -31,7 +31,9 @@ SECTIONS: dict[str, type] = {
     "sonar.tma.bounds": BoundsParams,
     "sonar.tma.bounds.*": BoundsParams,
 }
-STRUCTURE = ("zenoh", "radar", "sonar", "sim")
+STRUCTURE = ("zenoh", "zenoh.auth", "zenoh.tls", "radar", "sonar", "sim")
+# Security tables of the deployment (docs/security.md), documented with the parameters.
+SECURITY: dict[str, type] = {"zenoh.auth": AuthConfig, "zenoh.tls": TlsConfig, "[site]": Site}
 
 
 def check_tables(cfg: Config) -> None:
@@ -97,6 +99,14 @@ def _type_name(hint: Any) -> str:
     return getattr(hint, "__name__", str(hint))
 
 
+def _default(f: dataclasses.Field) -> str:  # type: ignore[type-arg]
+    if f.default is not dataclasses.MISSING:
+        return repr(f.default)
+    if f.default_factory is not dataclasses.MISSING:
+        return repr(f.default_factory())
+    return "(required)"
+
+
 def markdown() -> str:
     """The reference page of every parameter table (docs/configuration.md)."""
     lines = [
@@ -109,14 +119,19 @@ def markdown() -> str:
         "(docs/scenarios.md). Every table is optional; absent keys take the defaults below.",
         "An unknown table or key, or a value of the wrong type, stops the service with",
         "exit code 2 and a message naming the key.",
+        "",
+        "Security (docs/security.md): `[zenoh.auth]` and `[zenoh.tls]` below; file paths",
+        "are relative to the deployment file's directory. `[[site]]` lists the receiver",
+        "sites (without it, each base and each array is a site of its own id); a site's",
+        "identity `site-<id>` may publish only the plots of its bases and the detections",
+        "of its arrays. A base or array belongs to at most one site.",
     ]
-    for name, cls in SECTIONS.items():
+    for name, cls in {**SECURITY, **SECTIONS}.items():
         meanings = _meanings(cls)
         hints = typing.get_type_hints(cls)
         lines += ["", f"## [{name}]", "", (cls.__doc__ or "").strip().splitlines()[0], "",
                   "| key | type | default | meaning |", "| --- | --- | --- | --- |"]
         for f in dataclasses.fields(cls):
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
-            lines.append(f"| {f.name} | {_type_name(hints[f.name])} | {default!r} | "
+            lines.append(f"| {f.name} | {_type_name(hints[f.name])} | {_default(f)} | "
                          f"{_describe(f.name, meanings)} |")
     return "\n".join(lines) + "\n"

@@ -1,0 +1,212 @@
+"""Zenoh identities and access control generated from the deployment (docs/security.md).
+
+Every process logs in to its router with a Zenoh username, its *identity*, derived from
+its command and its --base / --array (:func:`identity_of`). :func:`grants` says what
+each identity of a deployment may do, and :func:`access_control` turns that into the
+``access_control`` section of a Zenoh 1.x router (deny by default): a receiver site
+publishes only its bases' plots and its arrays' detections, a service only its output,
+metrics and liveliness keys, the operator only reads, and only ``global-fusion``
+publishes ``radar/gtracks``. Flows are seen from the router: *ingress* is what a client
+sends to it, *egress* what it sends to a client.
+
+Routers: a site router logs in upstream as ``router-<site>`` and may forward what the
+identities of its site may publish; the upstream router is recognised by a site router
+only by its certificate's common name ``router-fusion`` (mutual TLS: Zenoh's
+user/password authentication is one-way, the accepting side checks the connecting one).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from common.deploy.config import Config, ConfigError
+from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, token_name
+
+OPERATOR = "operator"
+SIMULATOR = "simulator"
+SUPERVISOR = "supervisor"
+EVALUATE = "evaluate"
+ROUTER_FUSION = "router-fusion"
+OPERATOR_TOOLS = ("watch", "record", "status", "demo", "run")
+TEST_FEEDS = ("simulate", "replay")
+OPERATOR_TOKENS = ("alive/record/*", "alive/demo/*")
+ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
+                "liveliness_token", "declare_liveliness_subscriber", "liveliness_query"]
+
+
+@dataclass
+class Grant:
+    """What one identity may do; key expressions under the deployment's root.
+
+    publish: keys it may put; subscribe: key expressions it may subscribe to (and
+    receive); tokens: liveliness tokens it may declare; serve: queryables it may declare
+    (and answer); query: key expressions it may query; watch_alive: liveliness queries
+    and subscribers on alive/**."""
+
+    publish: list[str] = field(default_factory=list)
+    subscribe: list[str] = field(default_factory=list)
+    tokens: list[str] = field(default_factory=list)
+    serve: list[str] = field(default_factory=list)
+    query: list[str] = field(default_factory=list)
+    watch_alive: bool = False
+
+
+def identity_of(command: str, base: str | None = None, array: str | None = None) -> str | None:
+    """The Zenoh username of ``pfusion COMMAND`` (None: the command needs no identity or
+    must be given one, like a router)."""
+    if command in PER_BASE and base:
+        return f"{command}-{base}"
+    if command in PER_ARRAY and array:
+        return f"{command}-{array}"
+    if command in (GLOBAL_FUSION, EVALUATE):
+        return command
+    if command in TEST_FEEDS:
+        return SIMULATOR
+    if command in OPERATOR_TOOLS:
+        return OPERATOR
+    return None
+
+
+def site_identity(site_id: str) -> str:
+    return f"site-{site_id}"
+
+
+def router_identity(site_id: str) -> str:
+    return f"router-{site_id}"
+
+
+def _service(command: str, instance: str, out: list[str], inputs: list[str]) -> Grant:
+    """A service: its outputs, its metrics key and its liveliness token."""
+    name = token_name(command)
+    return Grant(publish=[*out, f"metrics/{name}/{instance}"], subscribe=inputs,
+                 tokens=[f"alive/{name}/{instance}"])
+
+
+def grants(cfg: Config) -> dict[str, Grant]:
+    """Every identity of the deployment and what it may do (routers excluded)."""
+    g: dict[str, Grant] = {}
+    for s in cfg.sites:
+        g[site_identity(s.id)] = Grant(
+            publish=[f"radar/plots/{b}/*" for b in s.bases]
+            + [f"sonar/detections/{a}" for a in s.arrays])
+    for b in cfg.bases:
+        g[f"channel-plotter-{b.id}"] = _service("channel-plotter", b.id, [f"radar/fused/{b.id}"],
+                                                [f"radar/plots/{b.id}/*"])
+        g[f"elementary-tracker-{b.id}"] = _service("elementary-tracker", b.id,
+                                                   [f"radar/etracks/{b.id}"], [f"radar/fused/{b.id}"])
+    if cfg.bases:
+        g[GLOBAL_FUSION] = _service(GLOBAL_FUSION, "main", ["radar/gtracks"], ["radar/etracks/*"])
+        g[EVALUATE] = _service(EVALUATE, "main", [],
+                               ["radar/gtracks", "sim/truth/radar", "sim/status"])
+    for a in cfg.arrays:
+        bt = g[f"bearing-tracker-{a.id}"] = _service(
+            "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"], [f"sonar/detections/{a.id}"])
+        bt.serve = [f"sonar/history/{a.id}/*"]
+        tma = g[f"tma-{a.id}"] = _service(
+            "tma", a.id, [f"sonar/tma/{a.id}"],
+            [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}"])
+        tma.query = [f"sonar/history/{a.id}/*"]
+    g[OPERATOR] = Grant(subscribe=["**"], query=["**"], tokens=list(OPERATOR_TOKENS),
+                        watch_alive=True)
+    g[SUPERVISOR] = Grant(publish=["sonar/tma/bounds/*"])
+    g[SIMULATOR] = Grant(publish=["radar/plots/**", "sonar/detections/**", "sim/**"],
+                         tokens=["alive/simulate/*"], watch_alive=True)
+    return g
+
+
+def site_members(cfg: Config, site_id: str) -> list[str]:
+    """Identities whose traffic a site's router forwards: the site's feed, the services
+    of its bases and arrays, and the operator's tools."""
+    s = next(s for s in cfg.sites if s.id == site_id)
+    out = [site_identity(s.id), OPERATOR]
+    out += [f"{c}-{b}" for b in s.bases for c in PER_BASE]
+    out += [f"{c}-{a}" for a in s.arrays for c in PER_ARRAY]
+    return out
+
+
+def _rule(rid: str, flows: list[str], messages: list[str], root: str, keys: list[str]
+          ) -> dict[str, Any]:
+    return {"id": rid, "permission": "allow", "flows": flows, "messages": messages,
+            "key_exprs": [f"{root}/{k}" for k in keys]}
+
+
+def _rules(name: str, g: Grant, root: str) -> list[dict[str, Any]]:
+    """The allow rules of one identity (empty key lists give no rule)."""
+    parts = [
+        ("publish", ["ingress"], ["put"], g.publish),
+        ("readers", ["egress"], ["declare_subscriber"], ["**"] if g.publish else []),
+        ("subscribe", ["ingress"], ["declare_subscriber"], g.subscribe),
+        ("receive", ["egress"], ["put"], g.subscribe),
+        ("token", ["ingress"], ["liveliness_token"], g.tokens),
+        ("serve", ["ingress"], ["declare_queryable", "reply"], g.serve),
+        ("asked", ["egress"], ["query"], g.serve),
+        ("query", ["ingress"], ["query"], g.query),
+        ("answers", ["egress"], ["reply"], g.query),
+        ("alive", ["ingress"], ["declare_liveliness_subscriber", "liveliness_query"],
+         ["alive/**"] if g.watch_alive else []),
+        ("alive-in", ["egress"], ["liveliness_token", "reply"], ["alive/**"] if g.watch_alive else []),
+    ]
+    return [_rule(f"{name}/{what}", flows, msgs, root, keys) for what, flows, msgs, keys in parts
+            if keys]
+
+
+def _router_rules(name: str, members: list[Grant], root: str) -> list[dict[str, Any]]:
+    """A site router: ingress puts, tokens and replies of its members only; declarations,
+    queries and everything towards it on the whole root."""
+    union = Grant(publish=sorted({k for g in members for k in g.publish}),
+                  tokens=sorted({k for g in members for k in g.tokens}))
+    serve = sorted({k for g in members for k in g.serve})
+    return [
+        _rule(f"{name}/publish", ["ingress"], ["put"], root, union.publish),
+        _rule(f"{name}/token", ["ingress"], ["liveliness_token"], root, union.tokens),
+        _rule(f"{name}/reply", ["ingress"], ["reply"], root, [*serve, "alive/**"]),
+        _rule(f"{name}/declare", ["ingress", "egress"],
+              ["declare_subscriber", "declare_queryable", "declare_liveliness_subscriber",
+               "liveliness_query", "query"], root, ["**"]),
+        _rule(f"{name}/forward", ["egress"], ["put", "liveliness_token", "reply"], root, ["**"]),
+    ]
+
+
+def access_control(cfg: Config) -> dict[str, Any]:
+    """The router's ``access_control`` section: deny by default, an allow rule set and a
+    subject (its username) per identity, plus ``router-fusion`` by certificate common
+    name under mutual TLS."""
+    root = cfg.zenoh.root
+    g = grants(cfg)
+    rules, subjects, policies = [], [], []
+
+    def add(name: str, rs: list[dict[str, Any]], subject: dict[str, Any]) -> None:
+        if ":" in name:
+            raise ConfigError("site", f"identity {name!r} contains ':' (not allowed in a "
+                                      "Zenoh user:password file); rename the base, array or site")
+        rules.extend(rs)
+        subjects.append({"id": name, **subject})
+        policies.append({"id": name, "rules": [r["id"] for r in rs], "subjects": [name]})
+
+    for name, grant in g.items():
+        add(name, _rules(name, grant, root), {"usernames": [name]})
+    for s in cfg.sites:
+        name = router_identity(s.id)
+        add(name, _router_rules(name, [g[m] for m in site_members(cfg, s.id) if m in g], root),
+            {"usernames": [name]})
+    if cfg.zenoh.tls is not None and cfg.zenoh.tls.mtls:
+        add(ROUTER_FUSION, [_rule(f"{ROUTER_FUSION}/all", ["ingress", "egress"], ALL_MESSAGES,
+                                  root, ["**"])], {"cert_common_names": [ROUTER_FUSION]})
+    return {"enabled": True, "default_permission": "deny", "rules": rules,
+            "subjects": subjects, "policies": policies}
+
+
+def to_json5(acl: dict[str, Any]) -> str:
+    """The section as JSON5 text (JSON is JSON5) as ``pfusion acl`` prints it: one rule,
+    subject or policy per line."""
+    lines = ['{"access_control": {']
+    for k, v in acl.items():
+        if isinstance(v, list):
+            items = ",\n".join(f"    {json.dumps(x)}" for x in v)
+            lines.append(f'  "{k}": [\n{items}\n  ],')
+        else:
+            lines.append(f'  "{k}": {json.dumps(v)},')
+    lines[-1] = lines[-1].rstrip(",")
+    return "\n".join([*lines, "}}"])
