@@ -1,14 +1,17 @@
 """``pfusion``: one command line for every service and tool.
 
 Each command lives in a module with ``add_arguments(parser)`` and ``main(args) -> int``;
-the module is imported only when its command runs.
+the module is imported only when its command runs. An invalid config file or an
+unreachable router ends a command with one line on stderr and exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.metadata
 import logging
+import re
 import sys
 
 from common.deploy.config import ConfigError, Config, ZenohConfig, load
@@ -29,6 +32,28 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("services.replay.main", "republish a .pfrec recording in order"),
     "global-fusion": ("services.global_fusion.main", "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
+}
+
+
+# One example per command, shown by ``pfusion COMMAND --help`` (tests/test_cli.py parses
+# each with the command's own parser).
+EXAMPLES: dict[str, str] = {
+    "router": "pfusion router --listen tcp/127.0.0.1:7447",
+    "simulate": "pfusion simulate --config scenarios/two_targets.toml "
+                "--scenario scenarios/two_targets.toml --speed 1",
+    "watch": "pfusion watch --config scenarios/two_targets.toml 'radar/gtracks'",
+    "demo": "pfusion demo",
+    "params": "pfusion params --check scenarios/two_targets.toml",
+    "bearing-tracker": "pfusion bearing-tracker --config scenarios/sonar_tma.toml --array a1",
+    "tma": "pfusion tma --config scenarios/sonar_tma.toml --array a1",
+    "channel-plotter": "pfusion channel-plotter --config scenarios/two_targets.toml --base b1",
+    "elementary-tracker": "pfusion elementary-tracker --config scenarios/two_targets.toml --base b1",
+    "run": "pfusion run --config scenarios/two_targets.toml --with-router",
+    "status": "pfusion status --config scenarios/two_targets.toml --watch",
+    "record": "pfusion record --config scenarios/two_targets.toml 'radar/plots/**' --out run.pfrec",
+    "replay": "pfusion replay --config scenarios/two_targets.toml run.pfrec --speed 1",
+    "global-fusion": "pfusion global-fusion --config scenarios/two_targets.toml",
+    "evaluate": "pfusion evaluate --config scenarios/two_targets.toml",
 }
 
 
@@ -65,15 +90,37 @@ def _empty_config() -> Config:
     return parse({})
 
 
+def _zenoh_error() -> type[Exception]:
+    """``zenoh.ZError``, imported only once a command has failed (``params`` never loads
+    Zenoh)."""
+    import zenoh
+
+    return zenoh.ZError
+
+
+def one_line(e: Exception) -> str:
+    """An exception's message on one line, without the Rust source locations of Zenoh's."""
+    return " ".join(re.sub(r" at /\S+\.rs:\d+\.?", "", str(e)).split())
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="pfusion", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="pfusion", description=__doc__.splitlines()[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n  " + "\n  ".join(EXAMPLES[c] for c in ("run", "watch", "status"))
+               + "\n\n'pfusion COMMAND --help' shows the options and an example of each command.",
+    )
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {importlib.metadata.version('passive-fusion')}")
     parser.add_argument("--log-level", default="INFO", help="DEBUG, INFO, WARNING, ERROR")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (_, help_) in COMMANDS.items():
         sub.add_parser(name, help=help_, add_help=False)
     pre, rest = parser.parse_known_args(argv)
     module = importlib.import_module(COMMANDS[pre.command][0])
-    cmd = argparse.ArgumentParser(prog=f"pfusion {pre.command}", description=COMMANDS[pre.command][1])
+    cmd = argparse.ArgumentParser(prog=f"pfusion {pre.command}", description=COMMANDS[pre.command][1],
+                                  formatter_class=argparse.RawDescriptionHelpFormatter,
+                                  epilog=f"example:\n  {EXAMPLES[pre.command]}")
     module.add_arguments(cmd)
     args = cmd.parse_args(rest)
     logging.basicConfig(
@@ -88,6 +135,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
+    except _zenoh_error() as e:
+        print(f"pfusion {pre.command}: {one_line(e)}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -12,11 +12,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
 
 from common.wire import protocol
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS
-from common.deploy.config import ZenohConfig, load, parse
+from common.deploy.config import ConfigError, ZenohConfig, load, parse
 from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
 from common.bus.procs import pfusion_argv
 from common.wire.protocol import kind_of
@@ -72,10 +73,13 @@ def test_backoff_doubles_to_ten_seconds_and_resets_after_thirty() -> None:
 
 def test_router_endpoint_choice() -> None:
     scenario = load(TWO_TARGETS)
-    assert router_endpoint(scenario, None, 4242) == "tcp/127.0.0.1:4242"
-    assert router_endpoint(scenario, ["tcp/127.0.0.1:9"], 4242) == "tcp/127.0.0.1:9"
+    assert "connect" not in scenario.doc["zenoh"]
+    assert router_endpoint(scenario, None) == "tcp/127.0.0.1:7447"  # where watch/status look
+    assert router_endpoint(scenario, ["tcp/127.0.0.1:9"]) == "tcp/127.0.0.1:9"
     explicit = parse({"zenoh": {"connect": ["tcp/127.0.0.1:7999"]}})
-    assert router_endpoint(explicit, None, 4242) == "tcp/127.0.0.1:7999"
+    assert router_endpoint(explicit, None) == "tcp/127.0.0.1:7999"
+    with pytest.raises(ConfigError, match="zenoh.connect"):
+        router_endpoint(parse({"zenoh": {"connect": [], "listen": ["tcp/127.0.0.1:7998"]}}), None)
     assert loopback_port("tcp/127.0.0.1:7999") == 7999
     assert loopback_port("tcp/router:7447") is None
 

@@ -23,6 +23,7 @@ from common.core.sequence import SequenceCheck
 
 LOG_EVERY = 1000
 CLOSE_LINGER_S = 0.5
+CONNECT_TIMEOUT_S = 10
 ROUTER_RETRY = {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2.0}
 
 
@@ -37,15 +38,29 @@ def zenoh_config(
     c.insert_json5("listen/endpoints", json.dumps(listen))
     c.insert_json5("transport/link/tx/lease", str(lease_ms))
     if mode == "client":
-        c.insert_json5("connect/timeout_ms", "-1" if not connect else "10000")
+        c.insert_json5("connect/timeout_ms", "-1" if not connect else str(CONNECT_TIMEOUT_S * 1000))
     if mode == "router":  # a lost router-router session is retried every <= 1 s (docs/deployment.md)
         c.insert_json5("connect/retry", json.dumps(ROUTER_RETRY))
     return c
 
 
+class RouterUnreachable(zenoh.ZError):
+    """A client session found no router at its connect endpoints; the message names them
+    and the fix (``pfusion`` prints it as one line and exits with code 2)."""
+
+
 def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
-    """Open a session from a deployment's [zenoh] table (raises zenoh.ZError)."""
-    return zenoh.open(zenoh_config(zc.connect, zc.listen, mode))
+    """Open a session from a deployment's [zenoh] table (raises zenoh.ZError, and
+    RouterUnreachable for a client whose routers do not answer)."""
+    try:
+        return zenoh.open(zenoh_config(zc.connect, zc.listen, mode))
+    except zenoh.ZError as e:
+        if mode != "client" or not zc.connect:
+            raise
+        why = f"nothing answered within {CONNECT_TIMEOUT_S} s" if "Unable to connect" in str(e) else str(e)
+        raise RouterUnreachable(
+            f"no Zenoh router reachable at {', '.join(zc.connect)} ({why}): start one with "
+            f"'pfusion router --listen {zc.connect[0]}', or pass --connect ENDPOINT") from None
 
 
 def stop_on_signals() -> threading.Event:

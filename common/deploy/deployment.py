@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
-from common.deploy.config import Config
+from common.deploy.config import Config, ConfigError
 
 PER_BASE = ("channel-plotter", "elementary-tracker")
 PER_ARRAY = ("bearing-tracker", "tma")
@@ -68,14 +68,16 @@ def simulator_spec(config_path: str, scenario: str, seed: int, speed: float,
     return ChildSpec("simulate", tuple(argv), "simulate/*")
 
 
-def router_endpoint(cfg: Config, connect: Sequence[str] | None, free_port: int) -> str:
+def router_endpoint(cfg: Config, connect: Sequence[str] | None) -> str:
     """Where ``run --with-router`` listens: the first --connect endpoint, else the first
-    ``[zenoh] connect`` the file sets explicitly, else ``tcp/127.0.0.1:<free_port>``."""
+    ``[zenoh] connect`` endpoint (``tcp/127.0.0.1:7447`` by default), the one where the
+    other commands given the same file look for their router."""
     if connect:
         return connect[0]
-    if cfg.doc.get("zenoh", {}).get("connect"):
-        return cfg.zenoh.connect[0]
-    return f"tcp/127.0.0.1:{free_port}"
+    if not cfg.zenoh.connect:
+        raise ConfigError("zenoh.connect", "is empty: --with-router needs an endpoint to "
+                                           "listen on (set it or pass --connect)")
+    return cfg.zenoh.connect[0]
 
 
 def loopback_port(endpoint: str) -> int | None:

@@ -3,13 +3,20 @@ log lines with their names, restart crashed ones with back-off, stop them all cl
 
 Children are started with subprocess in their own process group (Ctrl-C reaches only
 ``run``, which then stops the simulator and the services first and the router last).
+
+``--with-router`` listens where the other commands given the same file look for their
+router (``router_endpoint``: the first --connect, else ``[zenoh] connect``, by default
+``tcp/127.0.0.1:7447``) and fails with one line and code 2 when it cannot listen there.
+Without it, ``run`` first checks that a router answers (else one line, code 2).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -17,8 +24,9 @@ import time
 from collections.abc import Iterable
 from typing import IO
 
-from common.bus.transport import free_port, stop_on_signals, wait_port
+from common.bus.transport import open_session, stop_on_signals
 from common.cli import COMMANDS, add_common, load_config
+from common.deploy.config import ZenohConfig
 from common.deploy.deployment import (
     Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
 )
@@ -26,12 +34,14 @@ from common.bus.procs import pfusion_argv
 
 STOP_TIMEOUT_S = 5.0
 POLL_S = 0.1
+LISTEN_TIMEOUT_S = 30.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p)
     p.add_argument("--with-router", action="store_true",
-                   help="also run a router on the first connect endpoint (or a free loopback port)")
+                   help="also run a router, listening on the first --connect endpoint, else "
+                        "on [zenoh] connect (default tcp/127.0.0.1:7447)")
     p.add_argument("--with-simulator", metavar="SCENARIO",
                    help="run this scenario once every service is alive")
     p.add_argument("--seed", type=int, default=1, help="simulator seed")
@@ -126,6 +136,68 @@ def stop_all(children: Iterable[Supervised], log: Log) -> None:
             c.proc.wait()
 
 
+def listen_error(endpoint: str) -> str | None:
+    """Why a router could not listen on ``tcp/HOST:PORT`` of this machine (e.g. "Address
+    already in use"), or None; None too for an endpoint this check cannot bind."""
+    proto, _, addr = endpoint.partition("/")
+    host, _, port = addr.rpartition(":")
+    if proto != "tcp" or not port.isdigit():
+        return None
+    try:
+        family, kind, _, _, address = socket.getaddrinfo(host.strip("[]"), int(port),
+                                                         type=socket.SOCK_STREAM)[0]
+    except socket.gaierror:
+        return None
+    with socket.socket(family, kind) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as Zenoh's listener does
+        try:
+            s.bind(address)
+        except OSError as e:
+            return e.strerror
+    return None
+
+
+def wait_listening(router: Supervised, endpoint: str) -> bool:
+    """Until the router accepts connections on a loopback endpoint (at once for another
+    endpoint): True, or False if it exited first."""
+    port = loopback_port(endpoint)
+    deadline = time.monotonic() + LISTEN_TIMEOUT_S
+    while port is not None and router.running() and time.monotonic() < deadline:
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=0.2):
+                return True
+        except OSError:
+            time.sleep(0.05)
+    return router.running()
+
+
+def start_router(endpoint: str, where: str, log: Log) -> Supervised | None:
+    """The router of ``--with-router``, listening on ``endpoint`` (taken from ``where``);
+    None (after one line on stderr) when it cannot listen."""
+    why = listen_error(endpoint)
+    if why is not None:
+        print(f"pfusion run: cannot listen on {endpoint} ({where}): {why}; if a router "
+              "already runs there, drop --with-router, else free the port or choose "
+              "another with --connect", file=sys.stderr)
+        return None
+    router = Supervised(ChildSpec("router", ("router", "--listen", endpoint), ""), log)
+    router.start()
+    if not wait_listening(router, endpoint):
+        stop_all([router], log)
+        print(f"pfusion run: the router could not listen on {endpoint} ({where}); "
+              "its log lines are above", file=sys.stderr)
+        return None
+    log.line("run", f"router listening on {endpoint} ({where})")
+    return router
+
+
+def check_reachable(zc: ZenohConfig) -> None:
+    """Open and close a session, so that an unreachable router ends ``run`` at once
+    (RouterUnreachable) instead of every child failing and being restarted."""
+    if zc.connect:
+        open_session(dataclasses.replace(zc, listen=[])).close()
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     log = Log(sys.stderr)
@@ -133,14 +205,14 @@ def main(args: argparse.Namespace) -> int:
     connect: list[str] = list(args.connect or [])
     router: Supervised | None = None
     if args.with_router:
-        endpoint = router_endpoint(cfg, args.connect, free_port())
+        endpoint = router_endpoint(cfg, args.connect)
+        where = "--connect" if args.connect else f"[zenoh] connect of {args.config}"
+        router = start_router(endpoint, where, log)
+        if router is None:
+            return 2
         connect = [endpoint]
-        router = Supervised(ChildSpec("router", ("router", "--listen", endpoint), ""), log)
-        router.start()
-        port = loopback_port(endpoint)
-        if port is not None:
-            wait_port(port)
-        log.line("run", f"router on {endpoint}")
+    else:
+        check_reachable(cfg.zenoh)
     services = [Supervised(s, log) for s in plan(cfg, args.config, COMMANDS, connect)]
     if not services:
         log.line("run", "the configuration describes no service whose command exists")
