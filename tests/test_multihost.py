@@ -192,8 +192,11 @@ class MultiSite:
     def start(self) -> None:
         """Routers, services and collectors of every host, then the sites' simulators
         (which wait for every service and collector to be alive)."""
-        for h in self.hosts.values():
-            self.net.start(h.name, pfusion_argv(*h.router_argv()), f"{h.name}-router")
+        routers = [self.net.start(h.name, pfusion_argv(*h.router_argv()), f"{h.name}-router")
+                   for h in self.hosts.values()]
+        logs = [self.logdir / f"{r.name}.log" for r in routers]
+        self.wait(lambda: all("router listening" in log.read_text() for log in logs),
+                  "routers not listening", 120.0)  # clients give up after 10 s without one
         alive = []
         for h in self.hosts.values():
             for spec in h.service_specs():
@@ -367,6 +370,7 @@ def test_deploy_files_are_the_tested_topology() -> None:
             assert line in docs, line
 
 
+@pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
 def test_clean_links_give_the_single_host_tracks(multisite: Callable[[bool], MultiSite]
                                                  ) -> None:
     """Three hosts on clean links: the global tracks of the single-host chain (numbers,
@@ -381,6 +385,7 @@ def test_clean_links_give_the_single_host_tracks(multisite: Callable[[bool], Mul
     report("clean", {**lat, "fusion_in": m["in"], "runtime_s": round(time.monotonic() - t0, 1)})
 
 
+@pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
 def test_impaired_links_give_the_same_tracks(multisite: Callable[[bool], MultiSite]) -> None:
     """Site links with 50 ms delay, 10 ms jitter and 1 % loss each way: reliable
     transport, so the same global tracks and no sample missed; every global track
@@ -406,6 +411,7 @@ def confirmed_near(g: dict[str, Any], truth: dict[str, Any], tid: int) -> list[i
             and np.linalg.norm(np.asarray(t["x"])[POS] - p) < NEAR]
 
 
+@pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
 def test_cut_site_link_reconnects_and_counts_what_it_missed(
         multisite: Callable[[bool], MultiSite]) -> None:
     """site2's link down for 10 s, then up: the routers reconnect by themselves (no
