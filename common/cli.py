@@ -8,13 +8,14 @@ unreachable router ends a command with one line on stderr and exit code 2.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import importlib.metadata
 import logging
 import re
 import sys
 
-from common.deploy.config import ConfigError, Config, ZenohConfig, load
+from common.deploy.config import ConfigError, Config, load
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "router": ("services.router.main", "run a Zenoh router (Python, no zenohd needed)"),
@@ -32,6 +33,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("services.replay.main", "republish a .pfrec recording in order"),
     "global-fusion": ("services.global_fusion.main", "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
+    "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
 }
 
 
@@ -54,6 +56,7 @@ EXAMPLES: dict[str, str] = {
     "replay": "pfusion replay --config scenarios/two_targets.toml run.pfrec --speed 1",
     "global-fusion": "pfusion global-fusion --config scenarios/two_targets.toml",
     "evaluate": "pfusion evaluate --config scenarios/two_targets.toml",
+    "acl": "pfusion acl --config scenarios/two_targets.toml",
 }
 
 
@@ -64,6 +67,8 @@ def add_common(p: argparse.ArgumentParser, config_required: bool = True) -> None
         "--connect", action="append", default=None,
         help="Zenoh endpoint to connect to, e.g. tcp/127.0.0.1:7447 (overrides [zenoh])",
     )
+    p.add_argument("--identity", help="Zenoh username under [zenoh.auth] (default: from the "
+                                      "command, --base, --array; docs/security.md)")
 
 
 def add_base_service(p: argparse.ArgumentParser) -> None:
@@ -73,15 +78,19 @@ def add_base_service(p: argparse.ArgumentParser) -> None:
 
 
 def load_config(args: argparse.Namespace) -> Config:
-    """The deployment config of ``args`` (every table checked), with --connect applied."""
+    """The deployment config of ``args`` (every table checked), with --connect applied
+    and the process's Zenoh identity (--identity, else common.deploy.acl.identity_of)."""
+    from common.deploy.acl import identity_of
     from common.deploy.sections import check_all
 
     cfg = load(args.config) if args.config else _empty_config()
     check_all(cfg)
+    z = cfg.zenoh
     if args.connect:
-        z = cfg.zenoh
-        cfg = Config(ZenohConfig(args.connect, [], z.root), cfg.bases, cfg.arrays, cfg.doc, cfg.path)
-    return cfg
+        z = dataclasses.replace(z, connect=args.connect, listen=[])
+    identity = getattr(args, "identity", None) or identity_of(
+        getattr(args, "pfusion_command", ""), getattr(args, "base", None), getattr(args, "array", None))
+    return dataclasses.replace(cfg, zenoh=dataclasses.replace(z, identity=identity))
 
 
 def _empty_config() -> Config:
@@ -122,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
                                   formatter_class=argparse.RawDescriptionHelpFormatter,
                                   epilog=f"example:\n  {EXAMPLES[pre.command]}")
     module.add_arguments(cmd)
+    cmd.set_defaults(pfusion_command=pre.command)
     args = cmd.parse_args(rest)
     logging.basicConfig(
         level=pre.log_level.upper(),

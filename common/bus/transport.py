@@ -1,5 +1,7 @@
-"""Zenoh plumbing: sessions with explicit endpoints and no multicast scouting, and an
-inbox that Zenoh callbacks only append to (see ../shared/zenoh-notes.md, pitfalls 1-3).
+"""Zenoh plumbing: sessions with explicit endpoints and no multicast scouting, TLS and
+user/password authentication from the deployment's [zenoh.tls] / [zenoh.auth]
+(docs/security.md), and an inbox that Zenoh callbacks only append to (see
+../shared/zenoh-notes.md, pitfalls 1-3).
 """
 
 from __future__ import annotations
@@ -13,12 +15,13 @@ import threading
 import time
 from collections import Counter
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import msgpack
 import zenoh
 
-from common.deploy.config import ZenohConfig
+from common.deploy.config import ConfigError, ZenohConfig
 from common.core.sequence import SequenceCheck
 
 LOG_EVERY = 1000
@@ -29,9 +32,11 @@ ROUTER_OPEN_TIMEOUT_MS = 3000
 
 
 def zenoh_config(
-    connect: list[str], listen: list[str], mode: str = "client", lease_ms: int = 2000
+    connect: list[str], listen: list[str], mode: str = "client", lease_ms: int = 2000,
+    security: ZenohConfig | None = None,
 ) -> zenoh.Config:
-    """A Zenoh config: multicast scouting off, explicit endpoints, short lease."""
+    """A Zenoh config: multicast scouting off, explicit endpoints, short lease; the TLS
+    and authentication of ``security`` (its [zenoh.tls], [zenoh.auth] and identity)."""
     c = zenoh.Config()
     c.insert_json5("mode", json.dumps(mode))
     c.insert_json5("scouting/multicast/enabled", "false")
@@ -45,7 +50,58 @@ def zenoh_config(
         # a connect attempt begun while the link was down waits for TCP's SYN back-off
         # (1, 2, 4 s...) until this timeout: 3 s instead of 10 s bounds the wait
         c.insert_json5("transport/unicast/open_timeout", str(ROUTER_OPEN_TIMEOUT_MS))
+    if security is not None:
+        _secure(c, security, mode, bool(connect))
     return c
+
+
+def _secure(c: zenoh.Config, zc: ZenohConfig, mode: str, connects: bool) -> None:
+    """TLS: root CA, a router's listening certificate, the certificate presented under
+    mutual TLS. Auth: a router's dictionary of identities, this identity's password."""
+    router = mode == "router"
+    if zc.tls is not None:
+        t = zc.tls
+        mine = ((t.router_cert or t.cert, "router_cert"), (t.router_key or t.key, "router_key")) \
+            if router else ((t.cert, "cert"), (t.key, "key"))
+        tls: dict[str, Any] = {"root_ca_certificate": _existing(t.root_ca, "zenoh.tls.root_ca"),
+                               "enable_mtls": t.mtls}
+        present = t.mtls and (connects or not router)
+        if router or present:
+            cert, key = (_existing(path, f"zenoh.tls.{name}") for path, name in mine)
+            if router:
+                tls |= {"listen_certificate": cert, "listen_private_key": key}
+            if present:
+                tls |= {"connect_certificate": cert, "connect_private_key": key}
+        c.insert_json5("transport/link/tls", json.dumps(tls))
+    if zc.auth is not None:
+        usrpwd: dict[str, str] = {}
+        if router:
+            usrpwd["dictionary_file"] = _existing(zc.auth.dictionary, "zenoh.auth.dictionary")
+        if zc.identity:
+            usrpwd |= {"user": zc.identity, "password": password(zc.auth.credentials, zc.identity)}
+        elif not router or connects:
+            raise ConfigError("zenoh.auth", "this command has no Zenoh identity: pass "
+                                            "--identity NAME (docs/security.md)")
+        c.insert_json5("transport/auth/usrpwd", json.dumps(usrpwd))
+
+
+def _existing(path: str, key: str) -> str:
+    if not path:
+        raise ConfigError(key, "missing (a file path)")
+    if not Path(path).is_file():
+        raise ConfigError(key, f"{path} does not exist")
+    return path
+
+
+def password(credentials: str, identity: str) -> str:
+    """The password of ``identity`` in a ``user:password`` file (Zenoh's dictionary
+    format)."""
+    for line in Path(_existing(credentials, "zenoh.auth.credentials")).read_text().splitlines():
+        user, sep, pw = line.strip().partition(":")
+        if sep and user == identity:
+            return pw
+    raise ConfigError("zenoh.auth.credentials", f"{credentials} has no line for identity "
+                                                f"'{identity}'")
 
 
 class RouterUnreachable(zenoh.ZError):
@@ -57,11 +113,14 @@ def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
     """Open a session from a deployment's [zenoh] table (raises zenoh.ZError, and
     RouterUnreachable for a client whose routers do not answer)."""
     try:
-        return zenoh.open(zenoh_config(zc.connect, zc.listen, mode))
+        return zenoh.open(zenoh_config(zc.connect, zc.listen, mode, security=zc))
     except zenoh.ZError as e:
         if mode != "client" or not zc.connect:
             raise
         why = f"nothing answered within {CONNECT_TIMEOUT_S} s" if "Unable to connect" in str(e) else str(e)
+        if zc.auth is not None or zc.tls is not None:
+            why += (f"; or it refused identity '{zc.identity}' or its certificate: check "
+                    "[zenoh.auth] and [zenoh.tls]")
         raise RouterUnreachable(
             f"no Zenoh router reachable at {', '.join(zc.connect)} ({why}): start one with "
             f"'pfusion router --listen {zc.connect[0]}', or pass --connect ENDPOINT") from None

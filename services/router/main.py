@@ -1,13 +1,22 @@
-"""``pfusion router``: a Zenoh router in a Python process (the Rust core routes)."""
+"""``pfusion router``: a Zenoh router in a Python process (the Rust core routes).
+
+With ``--config F`` whose deployment has [zenoh.tls] / [zenoh.auth], the router listens
+with its certificate, checks every client's user/password against the dictionary and,
+unless ``access_control = false``, applies the access control generated from the
+deployment (common.deploy.acl, ``pfusion acl``): deny by default (docs/security.md)."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 
 import zenoh
 
 from common.bus.transport import stop_on_signals, zenoh_config
+from common.cli import load_config
+from common.deploy.acl import access_control
+from common.deploy.config import Config, ConfigError
 
 log = logging.getLogger("router")
 
@@ -17,12 +26,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="endpoint to listen on, e.g. tcp/127.0.0.1:7447 (repeatable)")
     p.add_argument("--connect", action="append", default=[],
                    help="another router to connect to (repeatable)")
+    p.add_argument("--config", help="deployment TOML file: its [zenoh.tls], [zenoh.auth] and "
+                                    "access control apply to this router")
+    p.add_argument("--identity", help="this router's username towards --connect routers "
+                                      "(router-<site>, docs/security.md)")
+
+
+def router_config(args: argparse.Namespace, cfg: Config | None) -> zenoh.Config:
+    """The router's Zenoh config: endpoints, and the deployment's security if any."""
+    c = zenoh_config(args.connect, args.listen, mode="router",
+                     security=cfg.zenoh if cfg is not None else None)
+    auth = cfg.zenoh.auth if cfg is not None else None
+    if auth is not None and auth.access_control:
+        tls = cfg.zenoh.tls  # type: ignore[union-attr]
+        if args.connect and (tls is None or not tls.mtls):
+            raise ConfigError("zenoh.tls.mtls", "a router that connects to another router "
+                              "applies access control only under mutual TLS (it knows the "
+                              "upstream router by its certificate); set mtls = true, or "
+                              "access_control = false for this router")
+        c.insert_json5("access_control", json.dumps(access_control(cfg)))  # type: ignore[arg-type]
+    return c
 
 
 def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args) if args.config else None
+    conf = router_config(args, cfg)
     stop = stop_on_signals()
-    with zenoh.open(zenoh_config(args.connect, args.listen, mode="router")):
-        log.info("router listening on %s", ", ".join(args.listen))
+    with zenoh.open(conf):
+        secure = cfg is not None and (cfg.zenoh.auth or cfg.zenoh.tls)
+        log.info("router listening on %s%s", ", ".join(args.listen),
+                 " (security of the deployment on)" if secure else "")
         while not stop.wait(0.2):
             pass
     log.info("router stopped")
