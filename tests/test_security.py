@@ -28,9 +28,10 @@ import pytest
 import zenoh
 
 from common.bus import transport
-from common.bus.procs import Child, pfusion_argv
+from common.bus.procs import Child
 from common.bus.transport import Inbox, Publisher, free_port, open_session, wait_port
 from common.cli import COMMANDS, load_config
+from common.cli import main as cli_main
 from common.deploy.acl import access_control, grants, router_identity, site_identity
 from common.deploy.config import Config, ConfigError, ZenohConfig, load
 from common.deploy.deployment import plan
@@ -170,10 +171,11 @@ KEYS = ["radar/plots/b1/c1", "radar/plots/b1/c2", "radar/plots/b2/c1", "radar/pl
         "metrics/tma/a1", "metrics/global_fusion/main", "metrics/channel_plotter/b2"]
 
 
-def test_pfusion_acl_prints_what_the_router_applies(tmp_path: Path) -> None:
+def test_pfusion_acl_prints_what_the_router_applies(tmp_path: Path,
+                                                     capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "d.toml").write_text(MIXED)
-    out = subprocess.run(pfusion_argv("acl", "--config", str(tmp_path / "d.toml")),
-                         capture_output=True, text=True, timeout=60, check=True).stdout
+    assert cli_main(["acl", "--config", str(tmp_path / "d.toml")]) == 0
+    out = capsys.readouterr().out
     assert json.loads(out) == {"access_control": access_control(load(tmp_path / "d.toml"))}
 
 
