@@ -47,9 +47,14 @@ ATTEMPT_S = 6
 SCANS = 60
 SCENARIO = SCENARIOS / "two_targets.toml"
 SECURITY = """
+[[sonar.array]]
+id = "a1"
+sigma0 = 0.02
+
 [[site]]
 id = "rx1"
 bases = ["b1"]
+arrays = ["a1"]
 
 [[site]]
 id = "rx2"
@@ -369,6 +374,34 @@ def test_site_router_forwards_only_its_site(secure: Secure) -> None:
     assert near == expected
 
 
+def history_replies(z: ZenohConfig, key: str) -> list[bytes]:
+    """Every reply from every queryable (target ALL, no consolidation), sorted."""
+    with open_session(z) as s:
+        replies = s.get(f"{ROOT}/{key}", target=zenoh.QueryTarget.ALL,
+                        consolidation=zenoh.ConsolidationMode.NONE, timeout=5.0)
+        return sorted(r.ok.payload.to_bytes() for r in replies if r.ok)
+
+
+def test_only_the_bearing_tracker_answers_history_queries(secure: Secure) -> None:
+    """A TMA of array a1 and the operator get the history that bearing-tracker-a1
+    serves; a site cannot query it; a queryable declared by another identity on the same
+    keys is never asked."""
+    with open_session(zc(secure, "bearing-tracker-a1")) as bt, \
+            open_session(zc(secure, "tma-a1")) as rogue:
+        real = bt.declare_queryable(f"{ROOT}/sonar/history/a1/*",
+                                    lambda q: q.reply(q.key_expr, b"real"))
+        fake = rogue.declare_queryable(f"{ROOT}/sonar/history/a1/*",
+                                       lambda q: q.reply(q.key_expr, b"fake"))
+        time.sleep(0.5)
+        try:
+            assert history_replies(zc(secure, "tma-a1"), "sonar/history/a1/7") == [b"real"]
+            assert history_replies(zc(secure, "operator"), "sonar/history/a1/7") == [b"real"]
+            assert history_replies(zc(secure, site_identity("rx1")), "sonar/history/a1/7") == []
+        finally:
+            real.undeclare()
+            fake.undeclare()
+
+
 def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
     """The radar chain of two_targets.toml (SCANS scans), every process authenticated
     under mutual TLS and the access control: the global tracks (numbers, states,
@@ -381,7 +414,8 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
     children: list[Child] = []
     connect = ("--connect", secure.endpoint)
     try:
-        specs = plan(secure.cfg, str(secure.config), COMMANDS)
+        specs = [s for s in plan(secure.cfg, str(secure.config), COMMANDS)
+                 if s.argv[0] in ("channel-plotter", "elementary-tracker", "global-fusion")]
         for spec in specs:
             children.append(Child(spec.name, *spec.argv, *connect,
                                   log=d / f"{spec.name.replace('/', '-')}.log"))
