@@ -29,7 +29,7 @@ import zenoh
 
 from common.bus import transport
 from common.bus.procs import Child
-from common.bus.transport import Inbox, Publisher, free_port, open_session, wait_port
+from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, load_config
 from common.cli import main as cli_main
 from common.deploy.acl import access_control, grants, router_identity, site_identity
@@ -44,6 +44,8 @@ from tests.harness import SCENARIOS
 
 ROOT = "pf/v1"
 ATTEMPT_S = 6
+WAIT_S = 60.0  # generous: the machine may be loaded (load average 25-35 seen)
+BLOCK = zenoh.CongestionControl.BLOCK
 SCANS = 60
 SCENARIO = SCENARIOS / "two_targets.toml"
 SECURITY = """
@@ -295,7 +297,7 @@ class Listener:
         self.sub = self.session.declare_subscriber(f"{ROOT}/**", self.inbox.on_sample)
         self.keys: list[str] = []
 
-    def until(self, key: str, timeout: float = 20.0) -> list[str]:
+    def until(self, key: str, timeout: float = WAIT_S) -> list[str]:
         """Keys received up to and including ``key`` (the end marker of a test)."""
         deadline = time.monotonic() + timeout
         while key not in self.keys:
@@ -310,11 +312,24 @@ class Listener:
         self.session.close()
 
 
-def put_all(z: ZenohConfig, suffixes: list[str]) -> None:
-    """Publish one sample on each key, in order, as services do (a declared publisher)."""
+def put_all(z: ZenohConfig, suffixes: list[str], declared: bool = True) -> None:
+    """Publish one sample on each key, in order, as services do (a declared, reliable,
+    blocking publisher), once each publisher knows of a subscriber (the listener's).
+    ``declared=False``: plain session puts, which a client sends to its router
+    whether or not it knows of a subscriber (an identity that may publish nothing is
+    never told of subscribers, so its declared publishers would not even send)."""
     with open_session(z) as s:
-        pubs = [Publisher(s, f"{ROOT}/{suffix}") for suffix in suffixes]
-        time.sleep(0.3)  # the router's answer to the publishers' interest
+        if not declared:
+            for suffix in suffixes:
+                s.put(f"{ROOT}/{suffix}", b"x", congestion_control=BLOCK)
+            transport.linger()
+            return
+        pubs = [s.declare_publisher(f"{ROOT}/{suffix}", congestion_control=BLOCK,
+                                    reliability=zenoh.Reliability.RELIABLE) for suffix in suffixes]
+        deadline = time.monotonic() + WAIT_S
+        while not all(p.matching_status.matching for p in pubs):
+            assert time.monotonic() < deadline, "publishers never matched the listener"
+            time.sleep(0.05)
         for pub in pubs:
             pub.put(b"x")
         transport.linger()
@@ -332,7 +347,7 @@ def test_identities_publish_only_their_keys(secure: Secure) -> None:
     listener = Listener(zc(secure, "operator"))
     try:
         time.sleep(0.5)
-        put_all(zc(secure, "operator"), ["radar/gtracks", "radar/plots/b1/c9"])
+        put_all(zc(secure, "operator"), ["radar/gtracks", "radar/plots/b1/c9"], declared=False)
         put_all(zc(secure, site_identity("rx1")), ["radar/plots/b1/c1", *DENIED,
                                                    "radar/plots/b1/c2"])
         put_all(zc(secure, "global-fusion"), ["radar/plots/b1/c3", "radar/gtracks"])
