@@ -12,6 +12,10 @@ F [19] / Q [20] noise, needed to recover their equivalent measurements.
 Cycle rule: a base that has sent nothing for `max_wait` seconds of wall time (since its
 last message, or since the first message of any base) is stale; the core then runs
 cycles without it (common.radar.global_fusion says why wall time and not message time).
+A late message (its cycle already ran) at most `max_wait` s of message time behind the
+latest cycle still shows its base alive, so the next cycle waits for it: a stale base
+whose stream runs slightly behind the others' (a site back after a cut link, issue 12)
+would otherwise stay stale for as long as its messages arrive after the others'.
 """
 
 from __future__ import annotations
@@ -48,6 +52,8 @@ def main(args: argparse.Namespace) -> int:
         if key.rsplit("/", 1)[-1] != msg["base"]:
             raise Rejected("base_mismatch", f"base '{msg['base']}' published on {key}")
         if core.is_late(msg["t"]):
+            if msg["t"] >= core.t_last - params.max_wait:  # just behind (docstring)
+                heard[msg["base"]] = time.monotonic()
             raise Rejected("time_backwards", f"t={msg['t']} after the cycle of t={core.t_last}")
         now = time.monotonic()
         for b in core.base_ids:  # a base never heard of is silent since the first message
