@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import heapq
+import json
 import random
 import select
 import signal
@@ -98,7 +99,7 @@ def main() -> int:
                 counts["forwarded"] += 1
             except OSError:  # the other side is down: the frame is lost, as on a cable
                 counts["send_errors"] += 1
-    print(f"netem {args.dev_a}<->{args.dev_b}: {counts}", file=sys.stderr, flush=True)
+    print(f"netem {args.dev_a}<->{args.dev_b}: {json.dumps(counts)}", file=sys.stderr, flush=True)
     return 0
 
 

@@ -62,6 +62,7 @@ CUT_AT, CUT_FOR = 6.0, 10.0  # s of wall time after site2's first plots; length 
 RESUME_WITHIN = 5.0  # s after the restore
 NEAR = 2000.0  # m: a confirmed global track this close to a target is its track
 SIM = tomllib.loads(SCENARIO.read_text())["sim"]
+MAX_WAIT = tomllib.loads((MULTISITE / "fusion.toml").read_text())["radar"]["fusion"]["max_wait"]
 SCANS = SIM["n_scans"]
 T_LAST = (SCANS - 1) * SIM["scan_period"]  # the last scan's time
 
@@ -399,8 +400,17 @@ def test_impaired_links_give_the_same_tracks(multisite: Callable[[bool], MultiSi
         impairment = ms.net.impairment
     assert lat["etracks_link_crossing"]["min_ms"] >= 40.0, lat  # 50 ms +- 10 ms one way
     assert lat["plot_to_gtrack"]["p99_ms"] < 5000.0, lat  # sanity only
-    report("impaired", {**lat, "impairment": impairment, "fusion_in": m["in"],
-                        "runtime_s": round(time.monotonic() - t0, 1)})
+    frames = userspace_netem_counts(ms.logdir)
+    if frames:  # the userspace netem dropped frames (~1 %), and TCP made up for them
+        assert sum(c["dropped"] for c in frames) > 0, frames
+    report("impaired", {**lat, "impairment": impairment, "netem_frames": frames,
+                        "fusion_in": m["in"], "runtime_s": round(time.monotonic() - t0, 1)})
+
+
+def userspace_netem_counts(logdir: Path) -> list[dict[str, int]]:
+    """The frame counts tests/netem.py printed when it stopped (none: kernel netem)."""
+    return [json.loads(line.split(": ", 1)[1]) for log in sorted(logdir.glob("netem*.log"))
+            for line in log.read_text().splitlines() if line.startswith("netem ")]
 
 
 def confirmed_near(g: dict[str, Any], truth: dict[str, Any], tid: int) -> list[int]:
@@ -416,7 +426,8 @@ def test_cut_site_link_reconnects_and_counts_what_it_missed(
         multisite: Callable[[bool], MultiSite]) -> None:
     """site2's link down for 10 s, then up: the routers reconnect by themselves (no
     process restarts); b3's elementary tracks reach the fusion host again and a global
-    cycle uses them within 5 s of the restore; the tracks keep their numbers (those of
+    cycle fuses them within 5 s of the restore (the first ones back may come after their
+    cycle ran: rejected as late, they make b3 live again); the tracks keep their numbers (those of
     the single-host chain) throughout; every b3 etracks message lost meanwhile is counted
     in global fusion's `missed`; before the first lost one the tracks are the single-
     host chain's."""
@@ -444,12 +455,15 @@ def test_cut_site_link_reconnects_and_counts_what_it_missed(
     assert lost, "the cut lost no etracks message"
     assert all(t_cut - 3.0 <= published[t] <= t_restore + RESUME_WITHIN for t in lost), \
         (t_cut, t_restore, [(t, published[t]) for t in lost])
-    # resumed: the first cycle after the restore whose b3 report arrived before it ran
-    back = [t for t in sorted(arrived) if arrived[t] > t_restore and t in gt_at
-            and gt_at[t] >= arrived[t]]
-    assert back, "b3 never contributed again"
-    resume = gt_at[back[0]] - t_restore
-    assert resume <= RESUME_WITHIN, (resume, back[0])
+    # resumed: b3's reports whose cycle had already run are rejected (time_backwards),
+    # and rejoin b3 (services/global_fusion): the next ones are fused. They are the first
+    # b3 reports back, at most one per scan b3 lags behind (max_wait of message time).
+    late = m["rejected"].get("time_backwards", 0)
+    assert late <= MAX_WAIT / SIM["scan_period"] + 1, m["rejected"]
+    back = [t for t in sorted(arrived) if arrived[t] > t_restore]
+    assert len(back) > late, "b3 never contributed again"
+    resume = gt_at[back[late]] - t_restore
+    assert resume <= RESUME_WITHIN, (resume, back[:late + 1])
     # before the first lost message: the single-host chain's tracks exactly
     before = [g for g in ours if g["t"] < lost[0]]
     assert_same_tracks(before, [g for g in ref if g["t"] < lost[0]])
@@ -465,6 +479,6 @@ def test_cut_site_link_reconnects_and_counts_what_it_missed(
     report("cut", {"cut_s": round(t_restore - t_cut, 2), "lost_b3_etracks": len(lost),
                    "lost_scan_times": [lost[0], lost[-1]], "fusion_missed": m["missed"],
                    "fusion_in": m["in"], "rejected": m["rejected"],
-                   "resume_s": round(resume, 3),
+                   "resume_s": round(resume, 3), "b3_late_after_restore": late,
                    "b3_back_at_fusion_s": round(arrived[back[0]] - t_restore, 3),
                    "runtime_s": round(time.monotonic() - t_start, 1)})
