@@ -48,8 +48,9 @@ from common.deploy.sections import check_all
 from common.radar.bistatic import POS
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
-from common.wire.radar_chain import RadarChain
-from tests.harness import REPO, SCENARIOS
+from common.bus.transport import Publisher
+from common.wire.radar_chain import RadarChain, etracks_message, plots_of
+from tests.harness import REPO, SCENARIOS, Deployment
 from tests.netns import HUB_ADDRESS, NsProcess, Topology, unavailable
 
 ROOT = "pf/v1"
@@ -482,3 +483,56 @@ def test_cut_site_link_reconnects_and_counts_what_it_missed(
                    "resume_s": round(resume, 3), "b3_late_after_restore": late,
                    "b3_back_at_fusion_s": round(arrived[back[0]] - t_restore, 3),
                    "runtime_s": round(time.monotonic() - t_start, 1)})
+
+
+def etracks_per_scan(scans: int) -> list[dict[str, dict[str, Any]]]:
+    """The etracks message of every base at each of the first ``scans`` scans of SCENARIO
+    (the plotters and trackers of the in-process chain)."""
+    cfg = load(SCENARIO)
+    scn = load_scenario(tomllib.loads(SCENARIO.read_text()))
+    rc = RadarChain(cfg)
+    out = []
+    for _, msgs in run_scenario(scn, cfg.bases, cfg.arrays, SEED, scans):
+        scan = {}
+        for key, msg in msgs:
+            if key.startswith("radar/plots/"):
+                b = msg["base"]
+                for t, fused in rc.plotters[b].push(msg["channel"], msg["t"], plots_of(msg)):
+                    scan[b] = etracks_message(b, rc.trackers[b].step(t, fused))
+        out.append(scan)
+    return out
+
+
+def test_a_stale_base_back_behind_the_others_is_fused_again(tmp_path: Path) -> None:
+    """services/global_fusion on loopback: b3 silent for more than max_wait (the cycles
+    go on with b1, b2), then back one scan behind: its report of t=6 comes after the
+    cycle of t=6 ran and is rejected as late, but makes b3 live again, so the cycle of
+    t=7 waits for b3's report (what brings a site back after a cut link)."""
+    scans = etracks_per_scan(8)
+    with Deployment(tmp_path) as d:
+        d.collect("radar/gtracks")
+        d.start("global-fusion", "global-fusion", "--config", str(SCENARIO))
+        d.wait_alive(["global_fusion/main"])
+        pubs = {b: Publisher(d.session, f"{ROOT}/radar/etracks/{b}") for b in ("b1", "b2", "b3")}
+
+        def send(t: int, *bases: str) -> None:
+            for b in bases:
+                pubs[b].put(protocol.encode(scans[t][b]))
+
+        def cycles() -> list[float]:
+            d.drain()
+            return [m["t"] for m in d.of("radar/gtracks")]
+
+        for t in range(5):
+            send(t, "b1", "b2", "b3")
+        send(5, "b1", "b2")
+        d.wait_for(lambda: cycles() == [0.0, 1.0, 2.0, 3.0, 4.0])
+        time.sleep(MAX_WAIT + 0.5)  # b3 is stale from now on
+        send(6, "b1", "b2")
+        d.wait_for(lambda: cycles()[-1:] == [6.0])  # 5 and 6 without b3
+        send(6, "b3")  # late: rejected, b3 live again
+        send(7, "b1", "b2")
+        time.sleep(1.0)
+        assert cycles()[-1] == 6.0, "the cycle of t=7 ran without waiting for b3"
+        send(7, "b3")
+        d.wait_for(lambda: cycles()[-1:] == [7.0])
