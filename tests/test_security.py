@@ -445,7 +445,7 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
         ours = [g for _, msgs in run_scenario(scn, cfg.bases, cfg.arrays, 1, SCANS)
                 for g in rc.step(msgs)]
         theirs: dict[float, dict] = {}
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + 300  # the fusion may lag far behind under load
         while len(theirs) < len(ours) and time.monotonic() < deadline:
             env = inbox.get(0.2)
             if env is not None:
