@@ -19,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from common.sonar.ctma_bounds import (
     MINIMAL_BOUNDS,
@@ -295,7 +295,7 @@ class TmaTracker:
     def _manoeuvre(self, tma: TmaSolution) -> TmaSolution:
         """Add a leg when the residuals reject the current legs (002 claim 13)."""
         dof = self.t.size - tma.beta.size
-        if dof <= 0 or tma.cost <= chi2.isf(0.01, dof):
+        if dof <= 0 or tma.cost <= chdtri(dof, 0.01):  # chi2 upper 1 % quantile
             return tma
         ta = detect_manoeuvre(self.t, self.brg, self.sbrg, self.own, self.t0, tma, self.support,
                               p_false=self.cfg.manoeuvre_p_false)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import Literal, Sequence
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 SupportKind = Literal["range", "speed", "course"]
 
@@ -321,5 +321,5 @@ def detect_manoeuvre(
         sol = solve_tma(t, brg, sbrg, own_xy, t0, current.beta, support, current.manoeuvre_times + (float(ta),))
         if sol.cost < best_cost:
             best_cost, best_t = sol.cost, float(ta)
-    gate = chi2.isf(p_false / cands.size, 2)
+    gate = chdtri(2, p_false / cands.size)  # chi2(2) upper quantile (scipy.stats.chi2.isf)
     return best_t if current.cost - best_cost > gate else None
