@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import fnmatch
 import json
 import secrets
 import subprocess
@@ -28,7 +29,7 @@ import pytest
 import zenoh
 
 from common.bus import transport
-from common.bus.procs import Child
+from common.bus.procs import Child, pfusion_argv
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, load_config
 from common.cli import main as cli_main
@@ -420,7 +421,8 @@ def test_only_the_bearing_tracker_answers_history_queries(secure: Secure) -> Non
 def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
     """The radar chain of two_targets.toml (SCANS scans), every process authenticated
     under mutual TLS and the access control: the global tracks (numbers, states,
-    covariances to 1e-9) of common.wire.radar_chain on the same plots."""
+    covariances to 1e-9) of common.wire.radar_chain on the same plots; ``pfusion
+    status`` (operator) lists every service with its counters."""
     d = secure.dir / "chain"
     d.mkdir()
     listener = open_session(zc(secure, "operator"))
@@ -451,6 +453,8 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
             if env is not None:
                 msg = protocol.decode("gtracks", env.payload)
                 theirs[msg["t"]] = msg
+        status = subprocess.run(pfusion_argv("status", "--config", str(secure.config), *connect),
+                                capture_output=True, text=True, timeout=120)
     finally:
         for c in reversed(children):
             c.stop()
@@ -466,3 +470,8 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
             np.testing.assert_allclose(np.ravel(a["P"]), b["P"], rtol=1e-9, atol=1e-9)
             confirmed += a["status"] == "confirmed"
     assert confirmed > 0
+    rows = {"/".join(line.split()[:2]): line.split()[2] for line in status.stdout.splitlines()
+            if len(line.split()) > 2}
+    for spec in specs:  # the operator sees every service, with its counters
+        seen = [n for name, n in rows.items() if fnmatch.fnmatchcase(name, spec.alive)]
+        assert seen and seen[0] != "-", (spec.alive, status.stdout, status.stderr)
