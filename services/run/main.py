@@ -171,16 +171,18 @@ def wait_listening(router: Supervised, endpoint: str) -> bool:
     return router.running()
 
 
-def start_router(endpoint: str, where: str, log: Log) -> Supervised | None:
-    """The router of ``--with-router``, listening on ``endpoint`` (taken from ``where``);
-    None (after one line on stderr) when it cannot listen."""
+def start_router(endpoint: str, where: str, config: str, log: Log) -> Supervised | None:
+    """The router of ``--with-router``, listening on ``endpoint`` (taken from ``where``)
+    with the deployment's security if any; None (after one line on stderr) when it
+    cannot listen."""
     why = listen_error(endpoint)
     if why is not None:
         print(f"pfusion run: cannot listen on {endpoint} ({where}): {why}; if a router "
               "already runs there, drop --with-router, else free the port or choose "
               "another with --connect", file=sys.stderr)
         return None
-    router = Supervised(ChildSpec("router", ("router", "--listen", endpoint), ""), log)
+    router = Supervised(ChildSpec("router", ("router", "--listen", endpoint, "--config", config), ""),
+                        log)
     router.start()
     if not wait_listening(router, endpoint):
         stop_all([router], log)
@@ -207,7 +209,7 @@ def main(args: argparse.Namespace) -> int:
     if args.with_router:
         endpoint = router_endpoint(cfg, args.connect)
         where = "--connect" if args.connect else f"[zenoh] connect of {args.config}"
-        router = start_router(endpoint, where, log)
+        router = start_router(endpoint, where, args.config, log)
         if router is None:
             return 2
         connect = [endpoint]
