@@ -106,6 +106,9 @@ class FusionParams(InitParams):
     max_coast: deletion after this many cycles without contributors (module 61).
     max_wait: seconds of wall time without a message after which the service declares
         a base stale (module doc; used by services/global_fusion, not by the core).
+    max_lead: seconds of message time after the latest cycle beyond which the service
+        rejects a message and declares its base stale (a clock jumped forward; above
+        the lag between bases of a fast replay, module doc: 29 scans measured).
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
     eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
         measurement against the elementary track's prediction (common.radar.decorrelation).
@@ -126,6 +129,7 @@ class FusionParams(InitParams):
     confirm_bases: int = 2
     max_coast: int = 5
     max_wait: float = 3.0
+    max_lead: float = 600.0
     init_confirmed_only: bool = True
     eq_gate_prob: float = 0.99999
 
@@ -194,6 +198,10 @@ class GlobalFusion:
     def is_late(self, t: float) -> bool:
         """True if a message of time t arrives after its cycle already ran."""
         return self.t_last is not None and t <= self.t_last
+
+    def is_duplicate(self, base: str, t: float) -> bool:
+        """True if `base` already has a message of time t waiting for its cycle."""
+        return self.index[base] in self.pending.get(t, {})
 
     def push(self, msg: dict[str, Any], stale: frozenset[str] = frozenset()
              ) -> list[dict[str, Any]]:

@@ -9,9 +9,17 @@ sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance vo
 in m^3 as `volume`). [radar.tracker] (ElementaryParams) gives the elementary trackers'
 F [19] / Q [20] noise, needed to recover their equivalent measurements.
 
-Cycle rule: a base that has sent nothing for `max_wait` seconds of wall time (since its
-last message, or since the first message of any base) is stale; the core then runs
-cycles without it (common.radar.global_fusion says why wall time and not message time).
+Cycle rule: a base that has sent nothing usable for `max_wait` seconds of wall time
+(since its last accepted message, or since the first message of any base) is stale; the
+core then runs cycles without it (common.radar.global_fusion says why wall time and not
+message time). Rejected, counted and logged (docs/faults.md): a message whose cycle
+already ran (time_backwards: late, out of order, or a base whose clock jumped back; its
+base goes stale if nothing else comes), a second message of one base and time
+(duplicate), and one more than `max_lead` s of message time after the latest cycle
+(clock_ahead: a base whose clock jumped forward; buffering its messages until the
+other bases reach their time would grow the buffer by one message per scan). A base
+whose latest message was clock_ahead is stale at once, until it sends a message in
+reach again (or a late one: its clock is back, the next cycle waits for it).
 A late message (its cycle already ran) at most `max_wait` s of message time behind the
 latest cycle still shows its base alive, so the next cycle waits for it: a stale base
 whose stream runs slightly behind the others' (a site back after a cut link, issue 12)
@@ -44,6 +52,7 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError("radar.base", str(e)) from None
     svc = Service("global_fusion", "main", cfg)
     heard: dict[str, float] = {}  # wall time of each base's last message
+    ahead: set[str] = set()  # bases whose latest message was clock_ahead
 
     def on_etracks(key: str, payload: bytes) -> None:
         msg = protocol.decode("etracks", payload)
@@ -52,14 +61,23 @@ def main(args: argparse.Namespace) -> int:
         if key.rsplit("/", 1)[-1] != msg["base"]:
             raise Rejected("base_mismatch", f"base '{msg['base']}' published on {key}")
         if core.is_late(msg["t"]):
+            ahead.discard(msg["base"])  # its clock is back: the next cycle waits for it
             if msg["t"] >= core.t_last - params.max_wait:  # just behind (docstring)
                 heard[msg["base"]] = time.monotonic()
             raise Rejected("time_backwards", f"t={msg['t']} after the cycle of t={core.t_last}")
+        if core.is_duplicate(msg["base"], msg["t"]):
+            raise Rejected("duplicate", f"base '{msg['base']}' sent t={msg['t']} twice")
         now = time.monotonic()
         for b in core.base_ids:  # a base never heard of is silent since the first message
             heard.setdefault(b, now)
         heard[msg["base"]] = now
-        stale = frozenset(b for b, t in heard.items() if now - t > params.max_wait)
+        if core.t_last is not None and msg["t"] > core.t_last + params.max_lead:
+            ahead.add(msg["base"])
+            raise Rejected("clock_ahead", f"base '{msg['base']}' t={msg['t']} is more than "
+                                          f"max_lead={params.max_lead} s after the cycle of "
+                                          f"t={core.t_last}: not fused, base stale")
+        ahead.discard(msg["base"])
+        stale = frozenset(b for b, t in heard.items() if now - t > params.max_wait) | ahead
         for out in core.push(msg, stale):
             svc.last_t = out["t"]
             svc.publish("radar/gtracks", out)
