@@ -14,7 +14,7 @@ demo: $(STAMP)
 	$(VENV)/bin/pfusion demo
 
 test: $(STAMP)
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q --durations=15 tests
 
 bench: $(STAMP)
 	$(PY) benchmarks/core.py
