@@ -114,7 +114,7 @@ def one_line(e: Exception) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="pfusion", description=__doc__.splitlines()[0],
+        prog="pfusion", description=__doc__.splitlines()[0].replace("``", ""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="examples:\n  " + "\n  ".join(EXAMPLES[c] for c in ("run", "watch", "status"))
                + "\n\n'pfusion COMMAND --help' shows the options and an example of each command.",
