@@ -63,7 +63,9 @@ def test_killed_tracker_and_fusion_restarted_by_run(tmp_path: Path) -> None:
         t_kill = newest("radar/gtracks")
         col.wait_for("b1's restart", lambda: len(run.pids("elementary-tracker/b1")) == 2, run)
         t_restart = max(newest(f"radar/etracks/{b}") for b in REMAINING)
-        col.wait_for("b1 back", lambda: newest("radar/etracks/b1") > t_restart + 8, run)
+        col.wait_for("b1 back", lambda: newest("radar/etracks/b1") > t_kill + 1, run)
+        b1_first = min(m["t"] for m in col.of("radar/etracks/b1") if m["t"] > t_kill + 1)
+        col.wait_for("5 more scans", lambda: newest("radar/gtracks") >= b1_first + 6, run)
         [fusion] = run.pids("global-fusion")
         os.kill(fusion, signal.SIGKILL)
         t_fkill = newest("radar/gtracks")
@@ -100,14 +102,14 @@ def test_killed_tracker_and_fusion_restarted_by_run(tmp_path: Path) -> None:
     # every kept track has a member of b1 among b1's tracks of the same scan (the
     # memberships of a base that does not report are kept, so membership alone says little)
     b1 = {m["t"]: {e["id"] for e in m["tracks"]} for m in col.of("radar/etracks/b1")}
-    b1_first = min(t for t in b1 if t > t_kill + 1)
 
     def b1_in(m: dict[str, Any]) -> bool:
         now = {k["id"]: k for k in m["tracks"]}
         return all(any(b == "b1" and e in b1.get(m["t"], ()) for b, e in now[tid]["etracks"])
                    for tid in kept)
 
-    b1_back = next(m["t"] for m in before if m["t"] >= b1_first and b1_in(m))
+    b1_back = next((m["t"] for m in before if m["t"] >= b1_first and b1_in(m)), None)
+    assert b1_back is not None, f"b1 not back in the global tracks by t={t_fkill}"
     lost = [t for t in sorted(truth) if t_kill < t < b1_first]
     print(f"tracker b1 killed after the cycle of t={t_kill}: {len(lost)} scans without b1, "
           f"restarted at t~{t_restart}, first etracks t={b1_first}, back in the global "
