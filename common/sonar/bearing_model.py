@@ -1,6 +1,7 @@
-"""Formulas of seed 000 (first embodiment) for bearing tracking: gate value G, track
-quality increment dL, SPRT thresholds T1/T2, linear-array bearing sigma, measurement
-matrix H.
+"""Formulas of seed 000 for bearing tracking: gate value G, track quality increment dL,
+SPRT thresholds T1/T2, linear-array bearing sigma, measurement matrix H (first
+embodiment) and the detection probability from the predicted amplitude (second
+embodiment, used by both modes).
 
 All functions are vectorised over leading axes. Units: bearings in radians, amplitude
 as a level in dB (000 calls the intensity "la amplitud o el nivel"), frequency in Hz.
@@ -15,6 +16,7 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.special import erfc
 
 LN_2PI = math.log(2.0 * math.pi)
 
@@ -77,3 +79,15 @@ def linear_array_sigma(
     infinite at endfire."""
     s = np.maximum(np.abs(np.sin(np.asarray(brg, dtype=float) - heading)), math.sin(endfire))
     return sigma0 / (s * np.sqrt(np.asarray(amp, dtype=float)))  # 000 claim 6
+
+
+def detection_probability(
+    amp_pred: ArrayLike, sigma_amp_pred: ArrayLike, p_d_max: float, d_thr: float
+) -> np.ndarray:
+    """000 (MHT embodiment) P_D = P_D_max / 2 erfc((D_thr - a_pre) / (sigma_a_pre sqrt 2)):
+    the probability that the predicted amplitude a_pre (dB, estimation error sigma_a_pre,
+    the standard deviation of the predicted amplitude) exceeds the detection threshold
+    D_thr, times P_D_max. Vectorised over a_pre and sigma_a_pre; sigma_a_pre > 0."""
+    a = np.asarray(amp_pred, dtype=float)
+    sig = np.asarray(sigma_amp_pred, dtype=float)
+    return 0.5 * p_d_max * erfc((d_thr - a) / (sig * math.sqrt(2.0)))  # 000 P_D(erfc)
