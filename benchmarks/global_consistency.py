@@ -7,7 +7,7 @@ breaks, per target the mean position NEES and the RMSE against the PCRLB after t
 settling time; then, over the runs, the average NEES per time against its 95 %
 chi-square interval (common.evaluation.pcrlb.monte_carlo_nees: Bar-Shalom, Li, Kirubarajan
 5.4.2), per target and in all, and the pooled RMSE / PCRLB. The same numbers as the
-multi-process test (tests/test_global_integration.py), which checks that this chain
+multi-process test (tests/integration/test_global_integration.py), which checks that this chain
 reproduces the processes.
 """
 

@@ -2,7 +2,7 @@
 
 Run: .venv/bin/python benchmarks/tma.py
 
-Scenario: the classic case of tests/test_tma.py (own ship 5 kn, 140 deg, turning to
+Scenario: the classic case of tests/sonar/test_tma.py (own ship 5 kn, 140 deg, turning to
 20 deg in 30-deg steps at minutes 12-15; 31 minutes; bearing sigma 1.5 deg), resampled
 to N bearings.
 """

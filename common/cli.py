@@ -37,7 +37,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-# One example per command, shown by ``pfusion COMMAND --help`` (tests/test_cli.py parses
+# One example per command, shown by ``pfusion COMMAND --help`` (tests/integration/test_cli.py parses
 # each with the command's own parser).
 EXAMPLES: dict[str, str] = {
     "router": "pfusion router --listen tcp/127.0.0.1:7447",

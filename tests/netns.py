@@ -1,4 +1,4 @@
-"""Hosts as Linux network namespaces for the multi-host tests (tests/test_multihost.py).
+"""Hosts as Linux network namespaces for the multi-host tests (tests/integration/test_multihost.py).
 
 A :class:`Topology` has one hub host ("fusion") and site hosts, each site joined to the
 hub by a WAN link: site --veth-- wan namespace --veth-- hub. The wan namespace forwards

@@ -1,4 +1,4 @@
-"""A collector for hosts the test process cannot reach (tests/test_multihost.py): it
+"""A collector for hosts the test process cannot reach (tests/integration/test_multihost.py): it
 subscribes to key expressions under the root on its host's router and writes every
 sample to stdout as msgpack ``[receive time, router time, key, payload]``.
 

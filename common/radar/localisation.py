@@ -23,7 +23,7 @@ Deviations, each for a stated reason:
   units) where the Gaussian likelihood has 1: with w(u) = 2 (1 - Phi(|u|)),
   int u^2 w du / int w du = (2 phi(0) / 3) / phi(0) = 2/3. The covariance of [41] is
   multiplied by 3/2 so that it is the error covariance of the block mean (honest
-  NEES); the Monte Carlo test of tests/test_global_init.py checks the coverage.
+  NEES); the Monte Carlo test of tests/radar/test_global_init.py checks the coverage.
 * The seed writes Erf(x) = (1/sqrt(pi)) int_0^x e^-t^2 dt [38], half the classical erf
   it names; [37] is a probability only with the classical erf (scipy.special.erf).
 * Each block stands for a uniform box, so its own spread (half-width h: h^2 / 3 per

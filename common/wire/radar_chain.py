@@ -3,7 +3,7 @@
 The services `channel-plotter`, `elementary-tracker` and `global-fusion` are thin
 shells around the same cores and build their messages with the functions below, so a
 chain run here gives what the processes publish for the same input (given the same
-per-scan grouping; tests/test_global_integration.py compares the two). Used for Monte Carlo
+per-scan grouping; tests/integration/test_global_integration.py compares the two). Used for Monte Carlo
 studies (many seeds in seconds), benchmarks and the consistency tests of the global
 covariance. No I/O, no clock.
 """

@@ -10,7 +10,7 @@ after STALLED_CLOSE_US of back-pressure, before its publishers' own sessions giv
 (Zenoh's default, 5 s, for both): with the default, a stalled subscriber blocked every
 publisher routed to it for 4.9 s and then their links closed (a normal subscriber lost
 1517 of 3000 samples); with 1 s, the longest put took 0.9 s and nothing was lost
-(docs/faults.md, tests/test_faults.py)."""
+(docs/faults.md, tests/integration/test_faults.py)."""
 
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ from common.cli import COMMANDS
 from common.deploy.config import load
 from common.deploy.deployment import token_name
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 COMPOSE = yaml.safe_load((REPO / "docker-compose.yml").read_text())
 SERVICES = COMPOSE["services"]
 ROUTER = "tcp/router:7447"

@@ -25,7 +25,7 @@ from common.wire import protocol
 from common.deploy.config import ConfigError, parse
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.sonar.tma_manager import TmaInputError, TmaManager, TmaParams, make_bounds, thin
-from harness import ROOT, SCENARIOS, Deployment
+from tests.harness import ROOT, SCENARIOS, Deployment
 from services.tma.main import tma_config
 
 SIG = 0.01

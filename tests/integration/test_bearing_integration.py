@@ -19,7 +19,7 @@ import numpy as np
 
 from common.wire import protocol
 from common.deploy.config import load
-from harness import ROOT, SCENARIOS, Deployment
+from tests.harness import ROOT, SCENARIOS, Deployment
 
 CONFIRM_CYCLES = 8
 MATCH = math.radians(5.0)

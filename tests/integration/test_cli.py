@@ -20,7 +20,7 @@ from common.bus.recording import RecordWriter
 from common.bus.transport import CONNECT_TIMEOUT_S, free_port
 from common.cli import COMMANDS, EXAMPLES
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 TWO = "scenarios/two_targets.toml"
 SONAR = "scenarios/sonar_tma.toml"
 

@@ -23,8 +23,8 @@ from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
 from tests.harness import ROOT, SCENARIOS, Deployment
-from tests.test_global_ekf import BASES, TX, RX, _Synth
-from tests.test_run import TWO_TARGETS, Collector, Run
+from tests.radar.test_global_ekf import BASES, TX, RX, _Synth
+from tests.integration.test_run import TWO_TARGETS, Collector, Run
 
 SCAN_S = 1.0  # scan period of two_targets.toml
 REMAINING = {"b2", "b3"}
@@ -314,7 +314,7 @@ def test_a_stalled_subscriber_stalls_no_service(tmp_path: Path) -> None:
     services/router/main.py)."""
     with Deployment(tmp_path) as d:
         stalled = subprocess.Popen([sys.executable, "-c", STALLED, d.endpoint],
-                                   stdout=subprocess.PIPE, cwd=Path(__file__).parents[1])
+                                   stdout=subprocess.PIPE, cwd=Path(__file__).parents[2])
         try:
             assert stalled.stdout is not None and stalled.stdout.readline() == b"subscribed\n"
             for key in ("radar/fused/*", "radar/etracks/*", "radar/gtracks", "sim/truth/radar"):

@@ -12,7 +12,7 @@ import pytest
 from common.deploy.config import ConfigError, load, parse
 from common.deploy.sections import SECTIONS, _describe, _meanings, check_all, markdown
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_docs_page_is_generated_from_the_code() -> None:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from harness import ROOT, SCENARIOS, Deployment
+from tests.harness import ROOT, SCENARIOS, Deployment
 
 RADAR = str(SCENARIOS / "two_targets.toml")
 SONAR = str(SCENARIOS / "sonar_tma.toml")

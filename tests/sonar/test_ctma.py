@@ -24,7 +24,7 @@ from common.sonar.ctma_bounds import (
     state_bounds,
 )
 from common.sonar.tma import solve_tma
-from tests.test_tma import BETA, BETA2, KN, OWN, SIG, TM, T, pos_at, true_bearings
+from tests.sonar.test_tma import BETA, BETA2, KN, OWN, SIG, TM, T, pos_at, true_bearings
 
 D = np.radians
 CFG = CtmaConfig()

@@ -31,7 +31,7 @@ from common.cli import COMMANDS
 from common.deploy.config import load
 from common.deploy.deployment import plan
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CONFIG = "scenarios/two_targets.toml"
 TIMEOUT_S = 120.0
 

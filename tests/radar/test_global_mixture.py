@@ -22,7 +22,7 @@ from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario
 
 A, M = 3, 2
-DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"
+DENSE = Path(__file__).resolve().parents[2] / "scenarios" / "dense.toml"
 
 
 def _mixture(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -10,7 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-SOAK = Path(__file__).resolve().parents[1] / "benchmarks" / "soak.py"
+SOAK = Path(__file__).resolve().parents[2] / "benchmarks" / "soak.py"
 PROCESSES = ("channel-plotter-b1", "channel-plotter-b2", "elementary-tracker-b1",
              "elementary-tracker-b2", "global-fusion", "router")
 

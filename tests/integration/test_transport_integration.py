@@ -9,7 +9,7 @@ from pathlib import Path
 
 from common.deploy.config import load
 from common.bus.procs import start_router
-from harness import ROOT, SCENARIOS, Deployment
+from tests.harness import ROOT, SCENARIOS, Deployment
 
 SCANS = 1000
 

@@ -22,7 +22,7 @@ from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoi
 from common.bus.procs import pfusion_argv
 from common.wire.protocol import kind_of
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 TWO_TARGETS = str(REPO / "scenarios" / "two_targets.toml")
 SONAR = str(REPO / "scenarios" / "sonar_tma.toml")
 ROOT = "pf/v1"

@@ -17,7 +17,7 @@ from common.sim.scenario import SonarArraySim
 from common.sim.sonar import bearing_sigma
 from common.sim.simulator import load_scenario, run_scenario
 
-SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BASES = [
     RadarBase("b1", np.array([-35e3, 20e3, 300.0]), np.array([0.0, 0.0, 30.0]), ["c1", "c2"], 1),
     RadarBase("b2", np.array([45e3, 10e3, 500.0]), np.array([0.0, 0.0, 30.0]), ["c1"], 0),

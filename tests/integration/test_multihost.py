@@ -112,7 +112,7 @@ def hosts(hub_address: str = EXAMPLE_HUB) -> dict[str, Host]:
 @cache
 def reference() -> tuple[list[dict[str, Any]], dict[float, dict[str, Any]]]:
     """The single-host chain (common.wire.radar_chain, shown equal to the single-host
-    processes by tests/test_global_integration.py) on SCENARIO, seed SEED: gtracks
+    processes by tests/integration/test_global_integration.py) on SCENARIO, seed SEED: gtracks
     messages and truth by scan time."""
     cfg = load(SCENARIO)
     scn = load_scenario(tomllib.loads(SCENARIO.read_text()))
