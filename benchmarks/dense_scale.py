@@ -1,0 +1,180 @@
+"""Radar at scale (issue 14): the in-process chain on the dense scenes, one table row per
+target density; exit code 1 when a quality goal of the issue fails.
+
+Run: .venv/bin/python benchmarks/dense_scale.py [--scenes dense dense300 dense1000]
+     [--scans N] [--seed N] [--profile]
+
+Each scene (scenarios/<name>.toml, written by benchmarks/dense_scene.py) goes through
+common.wire.radar_chain's cores in one process: simulator, channel plotter and
+elementary tracker of every base, global fusion, with the wall time of each service per
+scan (CPU of this process; the services are separate processes in a deployment, so these
+are the per-service costs). Quality of the confirmed global tracks against the truth
+after a 30 s warm-up (GOSPA assignment, cut-off 2 km): missed targets and false tracks
+per scan (as % of the targets present), number switches and breaks per 100 targets over
+the run, RMSE / PCRLB (median over targets) and mean position NEES (3 dof). The log-log
+slope of each service's cost against the number of targets is printed when several
+scenes run.
+
+Goals (issue 14, checked for scenes of >= 300 targets): missed < 2 % and false < 1 % per
+scan, switches < 1 per 100 targets, RMSE/PCRLB <= 1.5, mean NEES within a factor 1.5 of
+the dimension (2-4.5 for the 3-D position).
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from common.deploy.config import load, section
+from common.evaluation.pcrlb import Evaluation, score_targets
+from common.radar.global_fusion import FusionParams
+from common.sim.simulator import load_scenario, run_scenario
+from common.wire.radar_chain import RadarChain, etracks_message, plots_of
+
+REPO = Path(__file__).resolve().parents[1]
+WARMUP = 30.0
+GATE_C = 2000.0
+
+
+@dataclass
+class Row:
+    """One scene's measurements."""
+
+    name: str
+    targets: int
+    scans: int
+    ms: dict[str, float]
+    missed: float
+    false: float
+    switches: float
+    breaks: float
+    rmse_ratio: float
+    nees: float
+    present: float
+
+    def goals(self) -> list[str]:
+        """The issue's quality goals this row fails (empty: all met)."""
+        bad = []
+        if self.missed >= 0.02 * self.present:
+            bad.append(f"missed {self.missed:.1f} per scan >= 2 % of {self.present:.0f}")
+        if self.false >= 0.01 * self.present:
+            bad.append(f"false {self.false:.1f} per scan >= 1 % of {self.present:.0f}")
+        if self.switches >= 1.0:
+            bad.append(f"switches {self.switches:.2f} per 100 targets >= 1")
+        if self.rmse_ratio > 1.5:
+            bad.append(f"RMSE/PCRLB {self.rmse_ratio:.2f} > 1.5")
+        if not 3 / 1.5 <= self.nees <= 3 * 1.5:
+            bad.append(f"mean position NEES {self.nees:.2f} outside [2, 4.5]")
+        return bad
+
+
+def run(name: str, seed: int, scans: int | None) -> Row:
+    """The chain on scenarios/<name>.toml, scored."""
+    import tomllib
+
+    from services.evaluate.main import base_information, truth_state
+
+    path = REPO / "scenarios" / f"{name}.toml"
+    cfg = load(path)
+    scn = load_scenario(tomllib.loads(path.read_text()))
+    chain = RadarChain(cfg)
+    cost = {"plotter": 0.0, "tracker": 0.0, "fusion": 0.0}
+    ev = Evaluation(c=GATE_C, gamma=GATE_C)
+    missed, false, present, n_scans = [], [], [], 0
+    for t, msgs in run_scenario(scn, cfg.bases, [], seed, scans):
+        n_scans += 1
+        truth = next(m for k, m in msgs if k == "sim/truth/radar")
+        out = []
+        for key, msg in msgs:
+            if not key.startswith("radar/plots/"):
+                continue
+            base = msg["base"]
+            t0 = time.process_time()
+            fused = chain.plotters[base].push(msg["channel"], msg["t"], plots_of(msg))
+            t1 = time.process_time()
+            cost["plotter"] += t1 - t0
+            for tf, f in fused:
+                tracks = chain.trackers[base].step(tf, f)
+                t2 = time.process_time()
+                cost["tracker"] += t2 - t1
+                out += chain.fusion.push(etracks_message(base, tracks))
+                t1 = time.process_time()
+                cost["fusion"] += t1 - t2
+        g = next((m for m in out if m["t"] == t), {"tracks": []})
+        conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
+        ev.add(t, np.asarray(truth["id"]), truth_state(truth),
+                     np.array([k["id"] for k in conf], dtype=np.int64),
+                     np.array([k["x"] for k in conf]).reshape(-1, 6),
+                     np.array([k["P"] for k in conf]).reshape(-1, 6, 6))
+        res = ev.metrics.gospa_series[-1]
+        if t >= WARMUP:
+            n_truth = len(truth["id"])
+            present.append(n_truth)
+            missed.append(n_truth - res.rows.size)
+            false.append(len(conf) - res.rows.size)
+    p = section(cfg, "radar.fusion", FusionParams)
+    sc = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
+                       base_information(cfg), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), WARMUP)
+    s = ev.metrics.summary()
+    n_t = len(ev.truth)
+    ratio = np.array([v.rmse / v.bound for v in sc.values()])
+    nees = np.array([v.nees_pos for v in sc.values()])
+    return Row(name, n_t, n_scans, {k: 1e3 * v / n_scans for k, v in cost.items()},
+               float(np.mean(missed)), float(np.mean(false)), 100.0 * s.switches / n_t,
+               100.0 * s.breaks / n_t, float(np.median(ratio)), float(np.mean(nees)),
+               float(np.mean(present)))
+
+
+def table(rows: list[Row]) -> list[str]:
+    """The per-density table of issue 14 (costs: ms of CPU per scan, all bases)."""
+    out = [f"{'scene':<10} {'targets':>7} {'plotter':>8} {'tracker':>8} {'fusion':>8} {'x real':>7} "
+           f"{'missed':>12} {'false':>12} {'switch':>7} {'breaks':>7} {'RMSE/PCRLB':>10} {'NEES':>6}",
+           f"{'':<10} {'':>7} {'ms/scan':>8} {'ms/scan':>8} {'ms/scan':>8} {'':>7} "
+           f"{'per scan':>12} {'per scan':>12} {'/100 tg':>7} {'/100 tg':>7} {'median':>10} {'pos':>6}"]
+    for r in rows:
+        total = sum(r.ms.values())
+        out.append(f"{r.name:<10} {r.targets:>7} {r.ms['plotter']:>8.1f} {r.ms['tracker']:>8.1f} "
+                   f"{r.ms['fusion']:>8.1f} {1e3 / total:>7.1f} "
+                   f"{r.missed:>5.1f} ({100 * r.missed / r.present:4.1f}%) "
+                   f"{r.false:>5.1f} ({100 * r.false / r.present:4.1f}%) {r.switches:>7.2f} "
+                   f"{r.breaks:>7.2f} {r.rmse_ratio:>10.2f} {r.nees:>6.2f}")
+    if len(rows) >= 2:
+        n = np.log([r.targets for r in rows])
+        slopes = {k: np.polyfit(n, np.log([r.ms[k] for r in rows]), 1)[0] for k in rows[0].ms}
+        out.append("log-log slope of the cost per scan against targets: "
+                   + ", ".join(f"{k} {v:.2f}" for k, v in slopes.items()))
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", default=["dense", "dense300", "dense1000"])
+    ap.add_argument("--scans", type=int, default=None, help="default: the whole scenario")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--profile", action="store_true", help="cProfile of the run, by cumulative time")
+    args = ap.parse_args()
+    rows = []
+    for name in args.scenes:
+        if args.profile:
+            prof = cProfile.Profile()
+            rows.append(prof.runcall(run, name, args.seed, args.scans))
+            pstats.Stats(prof).sort_stats("tottime").print_stats(25)
+        else:
+            rows.append(run(name, args.seed, args.scans))
+        print("\n".join(table(rows[-1:])[2:]), flush=True)
+    print("\n".join(table(rows)))
+    fail = [f"{r.name}: {g}" for r in rows if r.targets >= 300 for g in r.goals()]
+    for f in fail:
+        print(f"FAIL {f}")
+    return 1 if fail else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
