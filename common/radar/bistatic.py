@@ -19,7 +19,8 @@ from typing import Protocol
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
+from common.core.angles import TWO_PI, wrap_2pi
+
 POS = np.array([0, 2, 4])
 VEL = np.array([1, 3, 5])
 
@@ -30,12 +31,6 @@ class BaseGeometry(Protocol):
     id: str
     tx: np.ndarray
     rx: np.ndarray
-
-
-def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Wrap angles (radians) to [0, 2pi)."""
-    w = np.mod(a, TWO_PI)
-    return np.where(w >= TWO_PI, 0.0, w)
 
 
 def _legs(pos: np.ndarray, tx: np.ndarray, rx: np.ndarray):
@@ -63,7 +58,7 @@ def bistatic_range_rate(
 def azimuth(pos: np.ndarray, rx: np.ndarray) -> np.ndarray:
     """Azimuth of positions (N, 3) seen from the receiver, clockwise from North; 001 [3]."""
     d = np.asarray(pos, dtype=float) - np.asarray(rx, dtype=float)
-    return wrap_angle(np.arctan2(d[..., 0], d[..., 1]))  # 001 [3], navigation convention
+    return wrap_2pi(np.arctan2(d[..., 0], d[..., 1]))  # 001 [3], navigation convention
 
 
 def project(state6: np.ndarray, tx: np.ndarray, rx: np.ndarray) -> np.ndarray:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.core.angles import wrap_2pi, wrap_pi
+from common.core.angles import TWO_PI, wrap_2pi, wrap_pi
 from common.radar.localisation import Constraints, block_localise, gauss_newton, residuals
 
 
@@ -80,7 +80,7 @@ def azimuth_pairs(az_a: np.ndarray, az_b: np.ndarray, gate: float) -> tuple[np.n
     """
     order = np.argsort(az_b)
     s = az_b[order]
-    ext = np.concatenate([s - 2 * np.pi, s, s + 2 * np.pi])
+    ext = np.concatenate([s - TWO_PI, s, s + TWO_PI])
     idx = np.concatenate([order, order, order])
     lo = np.searchsorted(ext, az_a - gate, "left")
     hi = np.searchsorted(ext, az_a + gate, "right")

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common.core.angles import TWO_PI, wrap_2pi
+
 
 @dataclass(frozen=True)
 class Segment:
@@ -67,7 +69,7 @@ class Mover:
                 segs.append(Segment(leg.t, pos[0], course, speed, vz, leg.turn_rate))
             else:
                 turn = math.copysign(1.0, leg.turn_rate)
-                dur = ((leg.course - course) * turn) % (2 * math.pi) / abs(leg.turn_rate)
+                dur = ((leg.course - course) * turn) % TWO_PI / abs(leg.turn_rate)
                 segs.append(Segment(leg.t, pos[0], course, speed, vz, leg.turn_rate))
                 end_pos, _, _ = _eval(segs, np.array([leg.t + dur]))
                 segs.append(Segment(leg.t + dur, end_pos[0], leg.course, speed, vz, 0.0))
@@ -81,7 +83,7 @@ class Mover:
 
     def headings(self, t: np.ndarray) -> np.ndarray:
         """Course over ground (rad, clockwise from North, [0, 2pi)) at times t."""
-        return np.mod(_eval(self.segments(), np.asarray(t, dtype=float))[2], 2 * math.pi)
+        return wrap_2pi(_eval(self.segments(), np.asarray(t, dtype=float))[2])
 
 
 def _eval(segs: list[Segment], t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

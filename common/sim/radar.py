@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from common.radar.bistatic import TWO_PI, azimuth, bistatic_range_rate, wrap_angle
+from common.core.angles import TWO_PI, wrap_2pi
+from common.radar.bistatic import azimuth, bistatic_range_rate
 from common.deploy.config import RadarBase
 from common.sim.scenario import RadarChannelSim, RadarSim
 
@@ -55,7 +56,7 @@ def radar_plots(
     order = rng.permutation(int(keep.sum()))
     out = {c: v[keep][order] for c, v in out.items()}
     out["rb"] = np.maximum(out["rb"], 0.0)
-    out["az"] = wrap_angle(out["az"])
+    out["az"] = wrap_2pi(out["az"])
     m = len(order)
     out.update(srb=np.full(m, ch.srb), svb=np.full(m, ch.svb), saz=np.full(m, ch.saz))
     return out

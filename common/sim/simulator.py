@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from common.radar.bistatic import wrap_angle
+from common.core.angles import wrap_2pi
 from common.deploy.config import ConfigError, RadarBase, SonarArray
 from common.sim.radar import radar_plots
 from common.sim.mover import Mover
@@ -121,7 +121,7 @@ def run_scenario(
                 p, v = sp[on, k], sv[on, k]
                 own = _own(own_p[k], own_v[k], own_h[k])
                 d = p[:, :2] - own_p[k, :2]
-                brg = wrap_angle(np.arctan2(d[:, 0], d[:, 1]))
+                brg = wrap_2pi(np.arctan2(d[:, 0], d[:, 1]))
                 for arr in arrays:
                     out.append(("sim/truth/sonar", {
                         "v": 1, "t": t, "array": arr.id, "own": dict(own), "id": sid[on].tolist(),

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from common.radar.bistatic import TWO_PI, wrap_angle
+from common.core.angles import TWO_PI, wrap_2pi
 from common.deploy.config import SonarArray
 from common.sim.scenario import SonarArraySim, SonarSim
 
@@ -68,7 +68,7 @@ def sonar_detections(
     det = (rng.random(n) < a.pd) & (snr >= a.snr_threshold_db)
     amp = 10.0 ** (snr / 10.0)
     sigma = bearing_sigma(brg[idx], amp, heading, array, a)
-    b = wrap_angle(brg[idx] + sigma * rng.standard_normal(n))
+    b = wrap_2pi(brg[idx] + sigma * rng.standard_normal(n))
     k = rng.poisson(a.clutter)
     clutter_snr = a.snr_threshold_db + rng.exponential(a.clutter_snr_db, k)
     out = {

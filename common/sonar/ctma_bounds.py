@@ -11,7 +11,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
+from common.core.angles import TWO_PI
+
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,8 @@ from typing import Literal, Sequence
 import numpy as np
 from scipy.special import chdtri
 
+from common.core.angles import wrap_pi
+
 SupportKind = Literal["range", "speed", "course"]
 
 
@@ -67,11 +69,6 @@ class TmaSolution:
         """Target (x, y, vx, vy) at time ``t`` and its 4x4 covariance."""
         G = state_map(np.array([t]), self.t0, self.manoeuvre_times)[0]
         return G @ self.beta, G @ self.P @ G.T
-
-
-def wrap(a: np.ndarray | float) -> np.ndarray:
-    """Angle(s) wrapped to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def leg_times(t: np.ndarray, t0: float, manoeuvre_times: Sequence[float]) -> np.ndarray:
@@ -162,7 +159,7 @@ def support_rows(
             sig = 2.0 * s.value * s.sigma
         else:
             v2 = vx * vx + vy * vy
-            d[k] = wrap(s.value - np.arctan2(vx, vy))
+            d[k] = wrap_pi(s.value - np.arctan2(vx, vy))
             H[k] = (vy * G[2] - vx * G[3]) / v2
             sig = s.sigma
         d[k] /= sig
@@ -182,7 +179,7 @@ def weighted_system(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sigma-weighted differences delta (eq. 6), weighted H, and raw bearing residuals."""
     bhat, H = bearing_model(beta, t, own_xy, t0, manoeuvre_times)
-    res = wrap(brg - bhat)
+    res = wrap_pi(brg - bhat)
     d = res / sbrg
     Hw = H / sbrg[:, None]
     if support:
@@ -225,7 +222,7 @@ def initial_beta(
     v = np.linalg.solve(M, np.einsum("gn,ni,gn->gi", w, A, rhs)[..., None])[..., 0]
     xt = px[:, None] + v[:, :1] * dt
     yt = py[:, None] + v[:, 1:] * dt
-    res = wrap(brg - np.arctan2(xt - own_xy[:, 0], yt - own_xy[:, 1])) / sbrg
+    res = wrap_pi(brg - np.arctan2(xt - own_xy[:, 0], yt - own_xy[:, 1])) / sbrg
     g = int(np.argmin(np.sum(res * res, axis=1)))
     return np.array([px[g] + v[g, 0] * (t0 - t[m]), py[g] + v[g, 1] * (t0 - t[m]), v[g, 0], v[g, 1]])
 

@@ -17,8 +17,9 @@ from typing import Any
 import msgpack
 import numpy as np
 
+from common.core.angles import TWO_PI
+
 VERSION = 1
-TWO_PI = 2.0 * math.pi
 MAX_PAYLOAD = 16 * 1024 * 1024
 
 

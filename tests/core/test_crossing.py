@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from common.core.angles import TWO_PI
 from common.core.crossing import (
     CUTOFF_RADIUS,
     DENSITY_CUTOFF,
@@ -58,7 +59,6 @@ def dense_supnorm(z_pred, cov, S, angle_idx=()) -> np.ndarray:
 SIG = 0.01  # bearing noise standard deviation (rad)
 COV = np.array([[SIG**2]])
 Q = np.array([0.5, 0.5])
-TWO_PI = 2.0 * np.pi
 
 
 def test_pairwise_density_uses_covariance_of_track_j():

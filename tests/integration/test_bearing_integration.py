@@ -17,6 +17,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
+from common.core.angles import wrap_pi
 from common.wire import protocol
 from common.deploy.config import load
 from tests.harness import ROOT, SCENARIOS, Deployment
@@ -24,10 +25,6 @@ from tests.harness import ROOT, SCENARIOS, Deployment
 CONFIRM_CYCLES = 8
 MATCH = math.radians(5.0)
 MAX_FALSE = 1
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def _run(tmp_path: Path, scn: Path, array: str, t_end: float,
@@ -69,7 +66,7 @@ def _score(btracks: list, truth: list) -> dict[str, Any]:
             conf_at.setdefault(trk["id"], msg["t"])
             if tb.size == 0:
                 continue
-            d = np.abs(_wrap(trk["x"][0] - tb))
+            d = np.abs(wrap_pi(trk["x"][0] - tb))
             j = int(np.argmin(d))
             if d[j] < MATCH:
                 matched.add(trk["id"])
@@ -152,7 +149,7 @@ def test_sonar_narrowband_multiline(tmp_path: Path) -> None:
     tb = dict(zip(truth[-1]["id"].tolist(), truth[-1]["brg"].tolist()))
     assert all(len(trk["x"]) == 6 for trk in last["tracks"])
     for tid, n in n_lines.items():
-        ml = [m for m in last["multiline"] if abs(_wrap(np.asarray(m["brg"] - tb[tid]))) < MATCH]
+        ml = [m for m in last["multiline"] if abs(wrap_pi(np.asarray(m["brg"] - tb[tid]))) < MATCH]
         assert len(ml) == 1, f"target {tid}: {len(ml)} multi-line tracks"
         assert len(ml[0]["lines"]) == n
         lines = [trk for trk in last["tracks"] if trk["id"] in ml[0]["lines"]]

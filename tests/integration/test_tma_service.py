@@ -21,6 +21,7 @@ import msgpack
 import numpy as np
 import pytest
 
+from common.core.angles import wrap_pi
 from common.wire import protocol
 from common.deploy.config import ConfigError, parse
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
@@ -298,23 +299,19 @@ MATCH = math.radians(5.0)
 T_END = 179 * 20.0
 
 
-def _wrap(a: float) -> float:
-    return (a + math.pi) % TWO_PI - math.pi
-
-
 def _errors(s: dict[str, Any], truth: dict[str, Any]) -> tuple[int, float, float, float] | None:
     """(target, relative range error, course error, speed error) of a solution, matched
     to the target with the nearest true bearing (None: no target within MATCH)."""
     own = truth["own"]
     brg = math.atan2(s["x"] - own["x"], s["y"] - own["y"])
-    d = [abs(_wrap(brg - b)) for b in truth["brg"]]
+    d = [abs(wrap_pi(brg - b)) for b in truth["brg"]]
     if not d or min(d) > MATCH:
         return None
     j = int(np.argmin(d))
     r = math.hypot(truth["x"][j] - own["x"], truth["y"][j] - own["y"])
     k = math.atan2(truth["vx"][j], truth["vy"][j])
     v = math.hypot(truth["vx"][j], truth["vy"][j])
-    return int(truth["id"][j]), abs(s["range"] - r) / r, abs(_wrap(s["course"] - k)), abs(s["speed"] - v)
+    return int(truth["id"][j]), abs(s["range"] - r) / r, abs(wrap_pi(s["course"] - k)), abs(s["speed"] - v)
 
 
 def test_tma_service_on_sonar_tma(tmp_path: Path) -> None:

@@ -15,7 +15,6 @@ from common.radar.bistatic import (
     ellipsoid_point,
     project,
     project_jacobian,
-    wrap_angle,
 )
 
 TX = np.array([30000.0, 0.0, 0.0])
@@ -52,12 +51,6 @@ def test_range_includes_baseline_and_rate_zero_on_tangent() -> None:
     assert bistatic_range(np.array([[-1000.0, 0, 0]]), TX, RX)[0] == pytest.approx(32000.0)
     mid = np.array([[15000.0, 20000.0, 0.0]])
     assert bistatic_range_rate(mid, np.array([[250.0, 0, 0]]), TX, RX)[0] == pytest.approx(0.0)
-
-
-def test_wrap_angle() -> None:
-    w = wrap_angle(np.array([-1e-20, -np.pi / 2, 2 * np.pi, 7.0]))
-    assert np.all((w >= 0) & (w < 2 * np.pi))
-    np.testing.assert_allclose(w[1:], [1.5 * np.pi, 0.0, 7.0 - 2 * np.pi])
 
 
 @settings(max_examples=60, deadline=None)

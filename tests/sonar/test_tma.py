@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from common.core.angles import wrap_pi
 from common.sonar.crlb import crlb, fisher_information, position_rms_bound
 from common.sonar.tma import (
     Support,
@@ -21,7 +22,6 @@ from common.sonar.tma import (
     solve_tma,
     state_map,
     support_rows,
-    wrap,
 )
 
 KN = 1852.0 / 3600.0
@@ -81,7 +81,7 @@ def test_bearing_model_jacobian_matches_finite_differences():
     _, H = bearing_model(beta, t, own, 100.0, legs)
     eps = 1e-4
     num = np.stack([
-        wrap(bearing_model(beta + eps * e, t, own, 100.0, legs)[0]
+        wrap_pi(bearing_model(beta + eps * e, t, own, 100.0, legs)[0]
              - bearing_model(beta - eps * e, t, own, 100.0, legs)[0]) / (2 * eps)
         for e in np.eye(6)
     ], 1)
@@ -126,7 +126,7 @@ def test_gauss_newton_step_is_eq_7_8():
     bhat, H = bearing_model(beta0, T, OWN, 0.0)
     F = np.linalg.inv(H.T @ H) @ H.T
     assert sol.n_iter == 1 and sol.converged
-    assert sol.beta == pytest.approx(beta0 + F @ wrap(b - bhat), rel=1e-9)
+    assert sol.beta == pytest.approx(beta0 + F @ wrap_pi(b - bhat), rel=1e-9)
 
 
 def test_initial_beta_lands_near_truth_noise_free():
