@@ -1,0 +1,381 @@
+"""Multiple-hypothesis bearing tracker of seed 000 (second embodiment, "seguimiento de
+multiples hipotesis"), the `mode_association = "mht"` of the bearing tracker.
+
+A track i is a weighted set of hypotheses (x_ij, P_ij, c_ij), held for all tracks in flat
+arrays (common.sonar.mht_hypotheses); its published state and covariance are the
+mixture's moments. One `MhtTracker.step` per detection list (clock cycle k -> k+1):
+  1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q);
+  2. gate y' S^-1 y < lambda^2 per hypothesis x measurement (common.core.gating: a batched
+     Mahalanobis gate with the largest R, then the exact S of each pair);
+  3. new hypotheses: one missed detection plus one Kalman update per gated measurement,
+     weights by the 000 formula with P_D from the predicted amplitude (erfc) and rho_F;
+  4. resolution conflicts of confirmed tracks (common.sonar.mht_conflict);
+  5. pruning below c_krit and the caps per track / per cycle;
+  6. track split (d_split), track merge (d_merge), hypothesis merge (d_merge_hyp);
+  7. new tentative tracks from measurements in no gate: x = H' z, P0, c = 1, SA = ZA = 0;
+  8. LR_i = sum_h c_ih, SPRT counter ZA against A and B, status SA by ZA_krit, weights
+     normalised when B is exceeded;
+  9. end of conflicts: a newly confirmed track near a conflicting track is re-linked;
+ 10. retrodiction over n_retro cycles (common.sonar.retrodiction), which also keeps the
+     bearing register served on sonar/history.
+Model, measurement noise and P0 are those of the single-hypothesis mode ([sonar.tracker]).
+
+Deviations (stated):
+- Deletion: the seed never deletes a track; a track whose status is tentative is
+  deleted after `n_delete` cycles in a row without LR > B, and any track whose bearing
+  sigma exceeds `sigma_max_deg` (a target lost for good would otherwise coast forever).
+- "Covariances not excessive" (track merge): both bearing sigmas below
+  `merge_sigma_max_deg`.
+- Order: conflicts are handled before pruning (the seed: after the usual Kalman update),
+  so that pruning sees the re-weighted hypotheses.
+- A track split off inherits the status and ZA of its track and shares its register
+  up to the split.
+- Re-link at the end of a conflict: "track omega is linked to the past of track i" is
+  implemented as track i continuing with omega's hypotheses (its number and register
+  are kept; its own hypotheses, which followed the other target, are dropped) and
+  omega removed. A conflict also ends when P_u of the pair's main hypotheses falls
+  below 1e-3 (the seed ends it by the re-link only).
+- Track numbers are never reused (the register of a number stays unambiguous).
+- Resolution conflicts need the broadband model (as in the seed); narrowband tracks run
+  without them, and without multi-line grouping.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from common.core.angles import wrap_2pi
+from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
+from common.core.kalman import predict, update
+from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
+from common.sonar.bearing_model import detection_probability, linear_array_sigma, measurement_matrix
+from common.sonar.bearing_tracker import Cycle, TimeOrderError, TrackerParams
+from common.sonar.mht_conflict import unresolved_probability
+from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
+                                         miss_weights, mixture_moments, pair_distance2, prune,
+                                         sprt, track_sums)
+from common.sonar.mht_tracks import TrackArrays, resolve_conflicts, relink
+from common.sonar.multiline import NEW
+from common.sonar.retrodiction import CycleRecord, Retrodiction
+
+
+@dataclass(frozen=True)
+class MhtParams:
+    """[sonar.tracker.mht] multiple-hypothesis mode of seed 000 (used when
+    [sonar.tracker] mode_association = "mht").
+
+    p_d_max, d_thr: P_D = P_D_max / 2 erfc((D_thr - a_pre) / (sigma_a_pre sqrt 2)), D_thr
+        in dB on the level scale of the amplitude state.
+    rho_f: rho_F of the weight formula, the false-alarm density (1 / (rad dB)).
+    gate: lambda of the gate y' S^-1 y < lambda^2.
+    c_krit: new hypotheses lighter than this are pruned.
+    d_merge_hyp, d_split, d_merge: distances d (of d^2) for the hypothesis merge, the
+        track split and the track merge.
+    A, B: SPRT limits of LR; za_krit: ZA above which a track is confirmed; za_max: cap
+        of ZA.
+    n_delete: a tentative track is deleted after this many cycles in a row without LR > B.
+    sigma_max_deg: a track whose bearing sigma exceeds this is deleted (deg).
+    merge_sigma_max_deg: bearing sigmas below which covariances are "not excessive" for
+        the track merge (deg).
+    res_deg: resolution of P_u and sigma of the fictitious "separation = 0" (deg).
+    d_auf: d_Auf of the re-link at the end of a resolution conflict.
+    n_retro: retrodiction depth (cycles).
+    max_hyp_track, max_hyp_cycle: caps on hypotheses per track and per cycle.
+    """
+
+    p_d_max: float = 0.9
+    d_thr: float = 3.0
+    rho_f: float = 0.02
+    gate: float = 3.5
+    c_krit: float = 1e-3
+    d_merge_hyp: float = 2.0
+    d_split: float = 5.0
+    d_merge: float = 2.0
+    A: float = 0.5
+    B: float = 2.0
+    za_krit: int = 3
+    za_max: int = 6
+    n_delete: int = 3
+    sigma_max_deg: float = 10.0
+    merge_sigma_max_deg: float = 3.0
+    res_deg: float = 1.5
+    d_auf: float = 3.0
+    n_retro: int = 10
+    max_hyp_track: int = 16
+    max_hyp_cycle: int = 20000
+
+
+class MhtTracker:
+    """Seed 000 multiple-hypothesis bearing tracker for one array (module docstring);
+    same `step`, `Cycle` and `history_of` as common.sonar.bearing_tracker."""
+
+    def __init__(self, params: TrackerParams, mht: MhtParams, array_kind: str,
+                 sigma0: float) -> None:
+        if params.mode == "auto":
+            raise ValueError('resolve mode "auto" before building the tracker')
+        self.params, self.mp = params, mht
+        self.narrowband = params.mode == "narrowband"
+        self.array_kind, self.sigma0 = array_kind, sigma0
+        self.H = measurement_matrix(self.narrowband)
+        self.m, self.n = self.H.shape
+        n = self.n
+        self.hx, self.hP = np.zeros((0, n)), np.zeros((0, n, n))
+        self.hc, self.ht = np.zeros(0), np.zeros(0, dtype=np.intp)
+        self.hmeas = np.zeros(0, dtype=np.intp)
+        self.tr = TrackArrays()
+        self.retro = Retrodiction(mht.n_retro, params.history_keep_deleted)
+        self.t: float | None = None
+        self.t_cycle = 0.0
+        self.k = 0
+        self.n_hyp_max = 0
+
+    # ------------------------------------------------------------------ model
+
+    def _F(self, T: float) -> np.ndarray:
+        return bearing_freq_F(T) if self.narrowband else bearing_F(T)
+
+    def _Q(self, T: float) -> np.ndarray:
+        p = self.params
+        if self.narrowband:
+            return bearing_freq_Q(T, p.q_theta, p.q_a, p.q_f)
+        return bearing_Q(T, p.q_theta, p.q_a)
+
+    def _R_diag(self, brg: np.ndarray, level: np.ndarray, heading: float) -> np.ndarray:
+        """Diagonal of 000 R_j per measurement: sigma_theta^2 (linear-array law or
+        sigma0), sigma_a^2[, sigma_v^2]."""
+        p = self.params
+        if self.array_kind == "linear":
+            sb = linear_array_sigma(brg, 10.0 ** (level / 10.0), heading, self.sigma0,
+                                    math.radians(p.endfire_deg))
+        else:
+            sb = np.full(brg.shape, self.sigma0)
+        cols = [sb**2, np.full(brg.shape, p.sigma_amp_db**2)]
+        if self.narrowband:
+            cols.append(np.full(brg.shape, p.sigma_freq_hz**2))
+        return np.column_stack(cols)
+
+    # ------------------------------------------------------------------ cycle
+
+    def step(self, t: float, brg: np.ndarray, amp: np.ndarray, heading: float,
+             own_x: float = 0.0, own_y: float = 0.0, freq: np.ndarray | None = None,
+             sbrg: np.ndarray | None = None) -> Cycle:
+        """Process the detection list of time t (as BearingTracker.step)."""
+        if self.t is not None and not t > self.t:
+            raise TimeOrderError(f"t={t} is not after the previous cycle t={self.t}")
+        if self.narrowband and freq is None:
+            raise ValueError("narrowband tracking needs detection frequencies")
+        mp, H, tr = self.mp, self.H, self.tr
+        brg = wrap_2pi(np.asarray(brg, dtype=float).reshape(-1))
+        level = 10.0 * np.log10(np.asarray(amp, dtype=float).reshape(-1))
+        cols = [brg, level] + ([np.asarray(freq, dtype=float).reshape(-1)] if self.narrowband else [])
+        z = np.column_stack(cols)
+        Rd = self._R_diag(brg, level, heading)
+        if sbrg is not None:
+            Rd[:, 0] = np.square(np.asarray(sbrg, dtype=float).reshape(-1))
+        self.t_cycle = t
+        T = 0.0 if self.t is None else t - self.t
+        F = self._F(T)
+        self.k += 1
+
+        xp, Pp = predict(self.hx, self.hP, F, self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
+        xp[:, 0] = wrap_2pi(xp[:, 0])
+        pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
+        hi, lj, y, S = self._gate(xp, Pp, z, Rd)
+        nT = tr.size
+        ci = track_sums(self.hc, self.ht, nT)
+        c_rel = self.hc / ci[self.ht] if self.hc.size else self.hc
+        xu, Pu, _, _ = update(xp[hi], Pp[hi], y, H, _diag(Rd[lj]), joseph=True)
+        xu[:, 0] = wrap_2pi(xu[:, 0])
+        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
+        detS = np.linalg.det(S)
+        Hn = self.hx.shape[0]
+        cx = np.concatenate([xp, xu])
+        cP = np.concatenate([Pp, Pu])
+        cc = np.concatenate([miss_weights(c_rel, pd),  # 000 c_ih, alpha = 0
+                             hit_weights(c_rel[hi], pd[hi], d2, detS, self.m, mp.rho_f)])
+        cpar = np.concatenate([np.arange(Hn), hi])
+        cmeas = np.concatenate([np.full(Hn, -1, dtype=np.intp), lj])
+        if not self.narrowband:  # 4. resolution conflicts
+            lgN = np.concatenate([np.zeros(Hn), -0.5 * (d2 + self.m * LN_2PI + np.log(detS))])
+            cx, cP, cc, cpar, cmeas = resolve_conflicts(self, xp, Pp, pd, hi, lj, lgN, z, Rd,
+                                                        cx, cP, cc, cpar, cmeas)
+
+        ct = self.ht[cpar]
+        keep = prune(cc, ct, nT, mp.c_krit, mp.max_hyp_track, mp.max_hyp_cycle)  # 000 c < c_krit
+        cx, cP, cc, ct, cpar, cmeas = cx[keep], cP[keep], cc[keep], ct[keep], cpar[keep], cmeas[keep]
+        ct = self._split(cx, cP, cc, ct)  # 000 split, may add tracks
+        head = merge_clusters(cx, cP, cc, ct, mp.d_merge_hyp)  # 000 hypothesis merge
+        heads, cx, cP, cc = merge_apply(cx, cP, cc, head)
+        ct, cpar, cmeas = ct[heads], cpar[heads], cmeas[heads]
+        self.hx, self.hP, self.hc, self.ht, self.hmeas = cx, cP, cc, ct, cmeas
+        x_pre, P_pre = xp[cpar], Pp[cpar]
+
+        unused = np.ones(z.shape[0], dtype=bool)
+        unused[lj] = False
+        self._open(z[unused], Rd[unused])  # 000 new tentative tracks
+        n_new = int(unused.sum())
+        x_pre = np.concatenate([x_pre, self.hx[-n_new:] if n_new else x_pre[:0]])
+        P_pre = np.concatenate([P_pre, self.hP[-n_new:] if n_new else P_pre[:0]])
+        cpar = np.concatenate([cpar, np.full(n_new, -1, dtype=np.intp)])
+
+        LR = track_sums(self.hc, self.ht, tr.size)  # 000 LR_i = sum_h c_ih
+        was = tr.SA.copy()
+        tr.ZA, tr.SA, norm = sprt(LR, tr.ZA, tr.SA, mp.A, mp.B, mp.za_krit, mp.za_max)
+        self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
+        tr.no_b = np.where(norm, 0, tr.no_b + 1)
+        self._conflict_flags()
+        newly = np.flatnonzero((tr.SA == 1) & (was == 0))
+        drop = relink(self, newly)
+        drop |= self._merge_tracks()  # 000 track merge
+        _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
+        drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)
+        drop |= np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)
+        for u in tr.uid[drop & (tr.ever_confirmed)]:
+            self.retro.retire(int(u))
+        live_h = ~drop[self.ht]
+        remap = np.cumsum(~drop) - 1
+        self.hx, self.hP, self.hc = self.hx[live_h], self.hP[live_h], self.hc[live_h]
+        self.ht, self.hmeas = remap[self.ht[live_h]], self.hmeas[live_h]
+        x_pre, P_pre, cpar = x_pre[live_h], P_pre[live_h], cpar[live_h]
+        tr.keep(~drop)
+        xi, Pi = xi[~drop], Pi[~drop]
+        tr.ever_confirmed |= tr.SA == 1
+
+        rows = np.column_stack([np.full(tr.size, t), xi[:, 0], np.sqrt(Pi[:, 0, 0]),
+                                np.full(tr.size, own_x), np.full(tr.size, own_y)])
+        self.retro.push(CycleRecord(self.hx, self.hP, self.hc, self.ht, tr.uid.copy(), cpar,
+                                    x_pre, P_pre, F, rows))  # 000 retrodiction
+        self.retro.compact(tr.uid)
+        self.n_hyp_max = max(self.n_hyp_max, int(np.bincount(self.ht).max(initial=0)))
+        self.t = t
+        return Cycle(t, tr.uid.copy(), tr.SA == 1, xi, Pi, tr.ZA.astype(float),
+                     tr.IN >= 0, np.full(tr.size, NEW, dtype=np.int64), [])
+
+    def _gate(self, xp: np.ndarray, Pp: np.ndarray, z: np.ndarray, Rd: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """000 gate y' S^-1 y < lambda^2: hypothesis rows, measurement columns,
+        innovations and S of the pairs inside. The batched gate uses S with the largest
+        R of the list (never smaller than a pair's S, so it loses no pair), then each
+        candidate pair is tested with its own S = H P^pre H' + R_l."""
+        H, lam2 = self.H, self.mp.gate**2
+        empty = np.zeros(0, dtype=np.intp)
+        if xp.shape[0] == 0 or z.shape[0] == 0:
+            return empty, empty, np.zeros((0, self.m)), np.zeros((0, self.m, self.m))
+        zp = xp @ H.T
+        A = H @ Pp @ H.T
+        Y = pairwise_innovations(zp, z, angle_idx=(0,))  # 000 y = z - H x^pre
+        d2max = mahalanobis_sq(Y, A + np.diag(Rd.max(axis=0)))
+        hi, lj = np.nonzero(gate(d2max, lam2))
+        y = Y[hi, lj]
+        S = A[hi] + _diag(Rd[lj])  # 000 S = H P^pre H' + R
+        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
+        ok = d2 < lam2  # 000 y' S^-1 y < lambda^2
+        return hi[ok], lj[ok], y[ok], S[ok]
+
+    def _open(self, z: np.ndarray, Rd: np.ndarray) -> None:
+        """000 tentative tracks: x = H' z, P = P0, c = 1, SA = ZA = IN = 0 (IN = -1 here)."""
+        k = z.shape[0]
+        if k == 0:
+            return
+        p = self.params
+        rates = [p.init_brg_rate_sigma, p.init_amp_rate_sigma, p.init_freq_rate_sigma][: self.m]
+        var = np.empty((k, self.n))
+        var[:, 0::2] = Rd
+        var[:, 1::2] = np.square(rates)
+        slots = self.tr.add(k, self.k)
+        self.hx = np.concatenate([self.hx, z @ self.H])  # 000 x = H' z
+        self.hP = np.concatenate([self.hP, _diag(var)])  # 000 P0
+        self.hc = np.concatenate([self.hc, np.ones(k)])
+        self.ht = np.concatenate([self.ht, slots])
+        self.hmeas = np.concatenate([self.hmeas, np.full(k, -1, dtype=np.intp)])
+
+    def _split(self, x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray) -> np.ndarray:
+        """000 track split: when the two heaviest hypotheses of a track are farther than
+        d_split, the lighter becomes a track of its own; returns the new track index."""
+        nT = self.tr.size
+        h1 = heaviest(c, track, nT)
+        c2 = c.copy()
+        c2[h1[h1 >= 0]] = -np.inf
+        h2 = heaviest(c2, track, nT)
+        both = np.flatnonzero((h1 >= 0) & (h2 >= 0) & np.isfinite(c2[np.maximum(h2, 0)]))
+        if both.size == 0:
+            return track
+        a, b = h1[both], h2[both]
+        far = pair_distance2(x[a], P[a], x[b], P[b]) > self.mp.d_split**2  # 000 d^2 > d_split^2
+        if not far.any():
+            return track
+        src = both[far]
+        slots = self.tr.split(src, self.k)
+        for s_old, s_new in zip(src, slots):
+            self.retro.inherit(int(self.tr.uid[s_new]), int(self.tr.uid[s_old]), self.t_cycle)
+        track = track.copy()
+        track[b[far]] = slots
+        return track
+
+    def _merge_tracks(self) -> np.ndarray:
+        """000 track merge: a confirmed and a tentative track closer than d_merge, with
+        covariances not excessive: the newer of the two is marked for deletion."""
+        tr, mp = self.tr, self.mp
+        drop = np.zeros(tr.size, dtype=bool)
+        _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
+        ok = np.sqrt(Pi[:, 0, 0]) < math.radians(mp.merge_sigma_max_deg)
+        conf, tent = np.flatnonzero(ok & (tr.SA == 1)), np.flatnonzero(ok & (tr.SA == 0))
+        if conf.size == 0 or tent.size == 0:
+            return drop
+        db = np.abs(np.angle(np.exp(1j * (xi[conf, None, 0] - xi[None, tent, 0]))))
+        near = db < mp.d_merge * np.sqrt(Pi[conf, None, 0, 0] + Pi[None, tent, 0, 0])
+        a, b = conf[np.nonzero(near)[0]], tent[np.nonzero(near)[1]]
+        close = pair_distance2(xi[a], Pi[a], xi[b], Pi[b]) < mp.d_merge**2  # 000 d^2 < d_merge^2
+        a, b = a[close], b[close]
+        newer = np.where(tr.uid[a] > tr.uid[b], a, b)
+        drop[newer] = True
+        return drop
+
+    def _conflict_flags(self) -> None:
+        """000 conflict detection: confirmed tracks whose main hypotheses processed the
+        same measurement get IN = each other; a conflict whose P_u fell below 1e-3 ends."""
+        tr = self.tr
+        main = heaviest(self.hc, self.ht, tr.size)
+        meas = np.where(main >= 0, self.hmeas[np.maximum(main, 0)], -1)
+        brg = self.hx[np.maximum(main, 0), 0]
+        res = math.radians(self.mp.res_deg)
+        for i in np.flatnonzero(tr.IN >= 0):
+            j = tr.slot_of(int(tr.IN[i]))
+            if j < 0 or unresolved_probability(brg[i] - brg[j], res) < 1e-3:
+                tr.IN[i] = -1
+        conf = np.flatnonzero((tr.SA == 1) & (meas >= 0) & (tr.IN < 0))
+        order = conf[np.argsort(meas[conf], kind="stable")]
+        for a, b in zip(order[:-1], order[1:]):
+            if meas[a] == meas[b] and tr.IN[a] < 0 and tr.IN[b] < 0:
+                tr.IN[a], tr.IN[b] = tr.uid[b], tr.uid[a]
+                tr.k_auf[a] = tr.k_auf[b] = self.k
+                tr.pre_rate[[a, b]] = tr.last_rate[[a, b]]
+                tr.pre_amp[[a, b]] = tr.last_amp[[a, b]]
+        ok = main >= 0
+        tr.last_rate[ok] = self.hx[main[ok], 1]
+        tr.last_amp[ok] = self.hx[main[ok], 2]
+
+    # ------------------------------------------------------------------ register
+
+    def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
+        """("confirmed" | "deleted", register columns) of a confirmed live or recently
+        deleted track, retrodicted over the last n_retro cycles; None otherwise."""
+        slot = self.tr.slot_of(track_id)
+        if slot >= 0:
+            if self.tr.SA[slot] != 1:
+                return None
+            return "confirmed", self.retro.rows(track_id)
+        if track_id in self.retro.retired:
+            return "deleted", self.retro.rows(track_id)
+        return None
+
+
+def _diag(v: np.ndarray) -> np.ndarray:
+    """Batch of diagonal matrices (K, m, m) from diagonals (K, m)."""
+    out = np.zeros(v.shape + (v.shape[-1],))
+    i = np.arange(v.shape[-1])
+    out[..., i, i] = v
+    return out

@@ -1,0 +1,179 @@
+"""Track-level state of the multiple-hypothesis tracker (common.sonar.mht) and its
+resolution-conflict steps: per-track arrays (000 SA, ZA, IN and the conflict memory),
+the modified correction of conflicting pairs, and the re-link at the end of a conflict.
+Equations and deviations: common.sonar.mht_conflict and common.sonar.mht.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from common.sonar.mht_conflict import interpret, relink_choice
+from common.sonar.mht_hypotheses import heaviest, pair_distance2
+
+if TYPE_CHECKING:
+    from common.sonar.mht import MhtTracker
+
+_FIELDS: dict[str, tuple[type, float]] = {
+    "uid": (np.int64, 0), "SA": (np.int8, 0), "ZA": (np.int64, 0), "IN": (np.int64, -1),
+    "k_auf": (np.int64, 0), "born": (np.int64, 0), "no_b": (np.int64, 0),
+    "pre_rate": (np.float64, 0.0), "pre_amp": (np.float64, 0.0),
+    "last_rate": (np.float64, 0.0), "last_amp": (np.float64, 0.0),
+    "ever_confirmed": (np.bool_, False),
+}
+
+
+class TrackArrays:
+    """One array per track attribute, indexed by track slot: uid (published number),
+    SA (1 confirmed, 0 tentative), ZA (SPRT counter), IN (uid of the track in conflict,
+    -1 none), k_auf (cycle the conflict began), pre_rate / pre_amp (main hypothesis'
+    bearing rate and level before the conflict), last_rate / last_amp (the same, last
+    cycle), born (cycle of creation), no_b (cycles in a row without LR > B),
+    ever_confirmed."""
+
+    uid: np.ndarray
+    SA: np.ndarray
+    ZA: np.ndarray
+    IN: np.ndarray
+    k_auf: np.ndarray
+    born: np.ndarray
+    no_b: np.ndarray
+    pre_rate: np.ndarray
+    pre_amp: np.ndarray
+    last_rate: np.ndarray
+    last_amp: np.ndarray
+    ever_confirmed: np.ndarray
+
+    def __init__(self) -> None:
+        for name, (dtype, _) in _FIELDS.items():
+            setattr(self, name, np.zeros(0, dtype=dtype))
+        self.next_uid = 1
+
+    @property
+    def size(self) -> int:
+        return int(self.uid.size)
+
+    def add(self, k: int, cycle: int) -> np.ndarray:
+        """Append k new tentative tracks (000: SA = ZA = 0, no conflict); their slots."""
+        start = self.size
+        for name, (dtype, default) in _FIELDS.items():
+            setattr(self, name, np.concatenate([getattr(self, name), np.full(k, default, dtype=dtype)]))
+        self.uid[start:] = np.arange(self.next_uid, self.next_uid + k)
+        self.born[start:] = cycle
+        self.next_uid += k
+        return np.arange(start, start + k)
+
+    def split(self, src: np.ndarray, cycle: int) -> np.ndarray:
+        """New tracks split off tracks `src`: same SA and ZA (000 split); their slots."""
+        slots = self.add(src.size, cycle)
+        self.SA[slots], self.ZA[slots] = self.SA[src], self.ZA[src]
+        self.ever_confirmed[slots] = self.SA[src] == 1
+        return slots
+
+    def keep(self, mask: np.ndarray) -> None:
+        """Keep the tracks of `mask` (slot order preserved)."""
+        for name in _FIELDS:
+            setattr(self, name, getattr(self, name)[mask])
+
+    def slot_of(self, uid: int) -> int:
+        """Slot of a track number, -1 if not live."""
+        hit = np.flatnonzero(self.uid == uid)
+        return int(hit[0]) if hit.size else -1
+
+
+def conflict_pairs(tr: TrackArrays) -> list[tuple[int, int]]:
+    """Slots (i, j) of the pairs in a resolution conflict, each pair once."""
+    out = []
+    for i in np.flatnonzero(tr.IN >= 0):
+        j = tr.slot_of(int(tr.IN[i]))
+        if j > i:
+            out.append((int(i), j))
+    return out
+
+
+def resolve_conflicts(
+    trk: "MhtTracker", xp: np.ndarray, Pp: np.ndarray, pd: np.ndarray, hi: np.ndarray,
+    lj: np.ndarray, lgN: np.ndarray, z: np.ndarray, Rd: np.ndarray, cx: np.ndarray,
+    cP: np.ndarray, cc: np.ndarray, cpar: np.ndarray, cmeas: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """000 modified correction: for every conflicting pair whose main hypotheses are again
+    gated with a common measurement, the children of the two main hypotheses are replaced
+    by the moment-matched joint interpretations (1)-(5); each main hypothesis keeps the
+    total weight of its children. lgN: log N(z_l) of every child (0 for misses)."""
+    tr, mp = trk.tr, trk.mp
+    pairs = conflict_pairs(tr)
+    if not pairs:
+        return cx, cP, cc, cpar, cmeas
+    main = heaviest(trk.hc, trk.ht, tr.size)
+    new: list[tuple[int, int, np.ndarray, np.ndarray, float]] = []
+    cc = cc.copy()
+    cx, cP = cx.copy(), cP.copy()
+    for i, j in pairs:
+        mi, mj = int(main[i]), int(main[j])
+        if mi < 0 or mj < 0 or not np.intersect1d(lj[hi == mi], lj[hi == mj]).size:
+            continue
+        kids = [np.flatnonzero(cpar == mi), np.flatnonzero(cpar == mj)]
+        hits = [{int(cmeas[q]): (cx[q], cP[q], float(lgN[q])) for q in ks if cmeas[q] >= 0}
+                for ks in kids]
+        res = interpret(((xp[mi], Pp[mi]), (xp[mj], Pp[mj])), (hits[0], hits[1]),
+                        (float(pd[mi]), float(pd[mj])), z, Rd, mp.rho_f,
+                        math.radians(mp.res_deg), mp.p_d_max, mp.d_thr)
+        for parent, ks, marg in ((mi, kids[0], res[0]), (mj, kids[1], res[1])):
+            evidence = cc[ks].sum()
+            seen = set()
+            for q in ks:
+                key = int(cmeas[q])
+                seen.add(key)
+                if key in marg:
+                    cx[q], cP[q], cc[q] = marg[key][0], marg[key][1], evidence * marg[key][2]
+                else:
+                    cc[q] = 0.0
+            for key in sorted(set(marg) - seen):
+                new.append((parent, key, marg[key][0], marg[key][1], evidence * marg[key][2]))
+    if new:
+        cx = np.concatenate([cx, np.array([r[2] for r in new])])
+        cP = np.concatenate([cP, np.array([r[3] for r in new])])
+        cc = np.concatenate([cc, [r[4] for r in new]])
+        cpar = np.concatenate([cpar, np.array([r[0] for r in new], dtype=np.intp)])
+        cmeas = np.concatenate([cmeas, np.array([r[1] for r in new], dtype=np.intp)])
+    return cx, cP, cc, cpar, cmeas
+
+
+def relink(trk: "MhtTracker", newly: np.ndarray) -> np.ndarray:
+    """000 end of a resolution conflict: a track omega confirmed this cycle, younger
+    than the conflict of (i, j), whose main hypothesis is within d_Auf of a hypothesis
+    of i or j is linked to that track's past (by the bearing-rate sign, then the level
+    from before the conflict, when near both). Returns the mask of tracks to delete."""
+    tr, mp = trk.tr, trk.mp
+    drop = np.zeros(tr.size, dtype=bool)
+    if newly.size == 0:
+        return drop
+    main = heaviest(trk.hc, trk.ht, tr.size)
+    for i, j in conflict_pairs(tr):
+        for w in newly:
+            if drop[w] or tr.born[w] <= tr.k_auf[i] or main[w] < 0:
+                continue
+            mw = int(main[w])
+            near = []
+            for s in (i, j):
+                h = np.flatnonzero(trk.ht == s)
+                d2 = pair_distance2(np.repeat(trk.hx[mw][None], h.size, 0),
+                                    np.repeat(trk.hP[mw][None], h.size, 0), trk.hx[h], trk.hP[h])
+                near.append(bool((d2 < mp.d_auf**2).any()))  # 000 d^2 < d_Auf^2
+            if not any(near):
+                continue
+            if all(near):
+                pick = relink_choice(trk.hx[mw, 1], trk.hx[mw, 2], tr.pre_rate[i], tr.pre_rate[j],
+                                     tr.pre_amp[i], tr.pre_amp[j])
+            else:
+                pick = 0 if near[0] else 1
+            s = (i, j)[pick]
+            own, theirs = trk.ht == s, trk.ht == w
+            trk.ht[own], trk.ht[theirs] = w, s  # s continues with omega's hypotheses
+            drop[w] = True
+            tr.IN[i] = tr.IN[j] = -1
+            break
+    return drop
