@@ -9,7 +9,7 @@ import re
 import typing
 from typing import Any
 
-from common.sonar.bearing_tracker import TrackerParams
+from common.sonar.mht import MhtParams, SonarTrackerParams
 from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
 from common.core.crossing import CrossingParams
 from common.sonar.ctma import CtmaConfig
@@ -24,7 +24,8 @@ SECTIONS: dict[str, type] = {
     "radar.crossing": RadarCrossingParams,
     "radar.fusion": FusionParams,
     "radar.fusion_crossing": CrossingParams,
-    "sonar.tracker": TrackerParams,
+    "sonar.tracker": SonarTrackerParams,
+    "sonar.tracker.mht": MhtParams,
     "sonar.crossing": CrossingParams,
     "sonar.tma": TmaParams,
     "sonar.tma.ctma": CtmaConfig,

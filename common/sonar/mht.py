@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -63,19 +64,31 @@ from common.sonar.retrodiction import CycleRecord, Retrodiction
 
 
 @dataclass(frozen=True)
+class SonarTrackerParams(TrackerParams):
+    """[sonar.tracker] seed 000 bearing tracker, both association modes.
+
+    mode_association: "gnn" the single-hypothesis mode (000 first embodiment, global
+        nearest neighbour), "mht" the multiple-hypothesis mode ([sonar.tracker.mht]).
+    """
+
+    mode_association: Literal["gnn", "mht"] = "gnn"
+
+
+@dataclass(frozen=True)
 class MhtParams:
-    """[sonar.tracker.mht] multiple-hypothesis mode of seed 000 (used when
-    [sonar.tracker] mode_association = "mht").
+    """[sonar.tracker.mht] seed 000 multiple-hypothesis mode (mode_association = "mht").
 
     p_d_max, d_thr: P_D = P_D_max / 2 erfc((D_thr - a_pre) / (sigma_a_pre sqrt 2)), D_thr
         in dB on the level scale of the amplitude state.
     rho_f: rho_F of the weight formula, the false-alarm density (1 / (rad dB)).
     gate: lambda of the gate y' S^-1 y < lambda^2.
     c_krit: new hypotheses lighter than this are pruned.
-    d_merge_hyp, d_split, d_merge: distances d (of d^2) for the hypothesis merge, the
-        track split and the track merge.
-    A, B: SPRT limits of LR; za_krit: ZA above which a track is confirmed; za_max: cap
-        of ZA.
+    d_merge_hyp: hypotheses of a track closer than this (d of d^2) are merged.
+    d_split: a track whose two heaviest hypotheses are farther than this is split.
+    d_merge: a tentative and a confirmed track closer than this are merged.
+    A, B: SPRT limits of LR (ZA - 1 below A, ZA + 1 above B).
+    za_krit: ZA above which a track is confirmed.
+    za_max: cap of ZA.
     n_delete: a tentative track is deleted after this many cycles in a row without LR > B.
     sigma_max_deg: a track whose bearing sigma exceeds this is deleted (deg).
     merge_sigma_max_deg: bearing sigmas below which covariances are "not excessive" for

@@ -2,24 +2,27 @@
 
 Subscribes root/sonar/detections/A, publishes root/sonar/btracks/A each cycle and
 answers root/sonar/history/A/<id> with the bearing register of a confirmed track
-(docs/protocol.md). Parameters: [sonar.tracker] (TrackerParams), [sonar.crossing]
-(CrossingParams).
+(docs/protocol.md; retrodicted in the multiple-hypothesis mode). Parameters:
+[sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
+[sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only).
 """
 
 from __future__ import annotations
 
 import argparse
 from dataclasses import replace
-from typing import Any
 
 import zenoh
 
 from common.wire import protocol
-from common.sonar.bearing_tracker import BearingTracker, Cycle, TimeOrderError, TrackerParams
+from common.wire.sonar_messages import btracks_message
+from common.sonar.bearing_tracker import BearingTracker, TimeOrderError
+from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams
 from common.cli import add_common, load_config
 from common.deploy.config import section
 from common.core.crossing import CrossingParams
-from common.bus.service import Rejected, Service
+from common.bus.service import Service
+from common.core.rejection import Rejected
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -27,39 +30,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--array", required=True, help="sonar array id of the deployment")
 
 
-def btracks_message(array: str, c: Cycle, narrowband: bool) -> dict[str, Any]:
-    """The btracks message of one cycle (docs/protocol.md)."""
-    cols = zip(c.ids.tolist(), c.confirmed.tolist(), c.x.tolist(), [p.ravel().tolist() for p in c.P],
-               c.quality.tolist(), c.ambiguous.tolist(), c.ml.tolist())
-    tracks = []
-    for tid, conf, x, P, q, amb, ml in cols:
-        tr = {"id": tid, "status": "confirmed" if conf else "tentative", "x": x, "P": P,
-              "quality": q, "ambiguous": amb}
-        if ml >= 0:
-            tr["ml"] = ml
-        tracks.append(tr)
-    msg: dict[str, Any] = {"v": protocol.VERSION, "t": c.t, "array": array, "tracks": tracks}
-    if narrowband:
-        msg["multiline"] = [
-            {"id": m.id, "lines": m.lines, "brg": m.brg, "brg_rate": m.brg_rate}
-            for m in c.multiline
-        ]
-    return msg
-
-
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     arr = cfg.array(args.array)
-    params = section(cfg, "sonar.tracker", TrackerParams)
+    params = section(cfg, "sonar.tracker", SonarTrackerParams)
+    mht = section(cfg, "sonar.tracker.mht", MhtParams)
     crossing = section(cfg, "sonar.crossing", CrossingParams)
     svc = Service("bearing_tracker", arr.id, cfg)
-    cores: list[BearingTracker] = []
+    cores: list[BearingTracker | MhtTracker] = []
 
-    def tracker(narrowband: bool) -> BearingTracker:
+    def tracker(narrowband: bool) -> BearingTracker | MhtTracker:
         """The core, built at the first detection list when mode = "auto"."""
         if not cores:
             mode = params.mode if params.mode != "auto" else ("narrowband" if narrowband else "broadband")
-            cores.append(BearingTracker(replace(params, mode=mode), arr.kind, arr.sigma0, crossing))
+            p = replace(params, mode=mode)
+            cores.append(MhtTracker(p, mht, arr.kind, arr.sigma0) if params.mode_association == "mht"
+                         else BearingTracker(p, arr.kind, arr.sigma0, crossing))
         return cores[0]
 
     def on_det(key: str, payload: bytes) -> None:
