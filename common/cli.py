@@ -34,6 +34,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "global-fusion": ("services.global_fusion.main", "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
     "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
+    "view": ("services.view.main", "live operator view in a browser: tracks, sonar, services"),
 }
 
 
@@ -57,6 +58,7 @@ EXAMPLES: dict[str, str] = {
     "global-fusion": "pfusion global-fusion --config scenarios/two_targets.toml",
     "evaluate": "pfusion evaluate --config scenarios/two_targets.toml",
     "acl": "pfusion acl --config scenarios/two_targets.toml",
+    "view": "pfusion view --config scenarios/two_targets.toml --port 8080",
 }
 
 

@@ -219,7 +219,7 @@ class ViewModel:
         ell = ellipses(np.array([np.asarray(s["P"]).reshape(4, 4)[:2, :2] for s in sols])) \
             if sols else []
         self._topic(f"tma/{msg['array']}").set({
-            "t": float(msg["t"]), "own": list(a.own)[-1:],
+            "t": float(msg["t"]), "own": list(a.own),
             "sols": [{"track": int(s["track"]), "x": round(s["x"], 1), "y": round(s["y"], 1),
                       "vx": round(s["vx"], 2), "vy": round(s["vy"], 2),
                       "range": round(s["range"], 1), "course": round(float(np.degrees(s["course"])), 2),

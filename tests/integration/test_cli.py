@@ -45,6 +45,7 @@ ARGS = {
     "replay": "{tmp}/in.pfrec",
     "global-fusion": f"--config {TWO}",
     "evaluate": f"--config {TWO}",
+    "view": f"--config {TWO} --port 0",
 }
 
 

@@ -1,0 +1,134 @@
+"""``pfusion view``: the live operator view in a browser (docs/view.md).
+
+One Zenoh session and one subscriber per key group feed one
+:class:`~common.wire.view_model.ViewModel`; every connected page gets a bounded,
+coalesced stream of it over a WebSocket (services/view/server.py). The Zenoh callbacks
+only append to an inbox and wake the event loop. Liveliness and counters are read as
+``pfusion status`` reads them (services.status.main: ``alive``, ``take``).
+
+Why aiohttp: one well-kept asyncio library that serves both HTTP and WebSockets, with
+back-pressure on a WebSocket's writes; the standard library has no WebSocket server.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+from typing import Any
+
+import zenoh
+from aiohttp import web
+
+from common.bus.transport import Inbox, open_session
+from common.cli import add_common, load_config
+from common.wire import protocol
+from common.wire.view_model import ViewModel
+from services.status.main import alive, take
+from services.view.server import Hub, app
+
+ALIVE_PERIOD_S = 1.0
+KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sonar/detections/*",
+        "sonar/btracks/*", "sonar/tma/*")
+log = logging.getLogger("view")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p, config_required=False)
+    p.add_argument("--port", type=int, default=8080, help="HTTP port of the page (0: any free one)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default loopback only; 0.0.0.0 for every interface)")
+
+
+class Feed:
+    """Zenoh samples -> inboxes -> the model, on the event loop."""
+
+    def __init__(self, session: zenoh.Session, hub: Hub, root: str,
+                 loop: asyncio.AbstractEventLoop) -> None:
+        self.session, self.hub, self.root, self.loop = session, hub, root, loop
+        self.data, self.metrics_inbox = Inbox(), Inbox()
+        self.metrics: dict[tuple[str, str], dict[str, Any]] = {}
+        self.wake = asyncio.Event()
+        self.subs = [session.declare_subscriber(f"{root}/{k}", self._on_data) for k in KEYS]
+        self.subs.append(session.declare_subscriber(f"{root}/metrics/**", self._on_metrics))
+
+    def _on_data(self, sample: zenoh.Sample) -> None:
+        self.data.on_sample(sample)
+        self.loop.call_soon_threadsafe(self.wake.set)
+
+    def _on_metrics(self, sample: zenoh.Sample) -> None:
+        self.metrics_inbox.on_sample(sample)
+        self.loop.call_soon_threadsafe(self.wake.set)
+
+    async def pump(self) -> None:
+        """Decode and ingest everything received, then wake the pages."""
+        counters = self.hub.counters
+        while True:
+            await self.wake.wait()
+            self.wake.clear()
+            while (env := self.data.get(0.0)) is not None:
+                counters["in"] += 1
+                kind = protocol.kind_of(env.key, self.root)
+                if kind is None:  # KEYS name only v1 data keys
+                    continue
+                try:
+                    self.hub.model.ingest(kind, protocol.decode(kind, env.payload))
+                except ValueError as e:  # DecodeError, or a base the deployment lacks
+                    counters["rejected"] += 1
+                    if counters["rejected"] == 1 or counters["rejected"] % 1000 == 0:
+                        log.error("rejected %s (%d so far): %s", env.key, counters["rejected"], e)
+            take(self.metrics_inbox, self.metrics)
+            self.hub.model.set_metrics(self.metrics)
+            self.hub.bump()
+
+    async def watch_alive(self) -> None:
+        """The liveliness tokens every ALIVE_PERIOD_S (a killed service's row turns red)."""
+        while True:
+            live = await asyncio.to_thread(alive, self.session, self.root)
+            self.hub.model.set_alive(set(live))
+            self.hub.bump()
+            await asyncio.sleep(ALIVE_PERIOD_S)
+
+    def close(self) -> None:
+        for s in self.subs:
+            s.undeclare()
+
+
+async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewModel, root: str) -> int:
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    hub = Hub(model)
+    runner = web.AppRunner(app(hub), access_log=None)
+    await runner.setup()
+    site = web.TCPSite(runner, args.host, args.port)
+    try:
+        await site.start()
+    except OSError as e:
+        await runner.cleanup()
+        print(f"pfusion view: cannot listen on {args.host}:{args.port} ({e.strerror}): "
+              "pass --port with a free port", file=sys.stderr)
+        return 2
+    port = runner.addresses[0][1]
+    print(f"view: http://{args.host}:{port}/", flush=True)
+    feed = Feed(session, hub, root, loop)
+    tasks = [asyncio.create_task(feed.pump()), asyncio.create_task(feed.watch_alive())]
+    try:
+        await stop.wait()
+    finally:
+        feed.close()
+        for t in tasks:
+            t.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+        await runner.cleanup()
+    log.info("stopped: %s", hub.stats())
+    return 0
+
+
+def main(args: argparse.Namespace) -> int:
+    cfg = load_config(args)
+    with open_session(cfg.zenoh) as session:
+        return asyncio.run(serve(args, session, ViewModel(cfg), cfg.zenoh.root))

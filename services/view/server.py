@@ -1,0 +1,113 @@
+"""The web side of ``pfusion view``: aiohttp serves the page (files shipped in this
+package's ``static/``) and one WebSocket per page, fed from the shared
+:class:`~common.wire.view_model.ViewModel`.
+
+Flow control per page (a slow browser never blocks anything else): a page's feed sends
+the topics changed since its previous message, then waits for the page's ``ack`` (sent
+after it has drawn the message) and ``MIN_INTERVAL_S``. At most one message per page is
+in flight; while a page is slow the model keeps only the latest state per topic, so
+nothing queues for it. Each topic is JSON-encoded once per version for all pages.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from collections import Counter
+from importlib.resources import files
+from typing import Any
+
+from aiohttp import WSMsgType, web
+
+from common.wire.view_model import ViewModel
+
+MIN_INTERVAL_S = 0.1
+STATIC = files("services.view") / "static"
+CONTENT_TYPES = {".html": "text/html", ".js": "text/javascript", ".css": "text/css"}
+log = logging.getLogger("view")
+
+
+class Hub:
+    """The model plus a generation counter that page feeds wait on."""
+
+    def __init__(self, model: ViewModel) -> None:
+        self.model = model
+        self.generation = 0
+        self._changed = asyncio.Event()
+        self.counters: Counter[str] = Counter()
+        self.pages = 0
+
+    def bump(self) -> None:
+        """The model changed: wake every page feed."""
+        self.generation += 1
+        self._changed.set()
+        self._changed = asyncio.Event()
+
+    async def wait_newer(self, generation: int) -> int:
+        while self.generation == generation:
+            await self._changed.wait()
+        return self.generation
+
+    def stats(self) -> dict[str, Any]:
+        return {"pages": self.pages, "generation": self.generation, **self.counters}
+
+
+async def _feed(ws: web.WebSocketResponse, hub: Hub, acked: asyncio.Event) -> None:
+    """Send a page every changed topic, one message in flight at a time."""
+    sent: dict[str, int] = {}
+    generation = -1
+    while not ws.closed:
+        text, sent = hub.model.delta(sent)
+        if text is not None:
+            await ws.send_str(text)
+            hub.counters["messages"] += 1
+            hub.counters["bytes"] += len(text)
+            await acked.wait()
+            acked.clear()
+            await asyncio.sleep(MIN_INTERVAL_S)
+            continue
+        generation = await hub.wait_newer(generation)
+
+
+async def websocket(request: web.Request) -> web.WebSocketResponse:
+    """One page: its feed runs beside this loop, which reads the page's acks."""
+    hub: Hub = request.app["hub"]
+    ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096)
+    await ws.prepare(request)
+    acked = asyncio.Event()
+    hub.pages += 1
+    feed = asyncio.create_task(_feed(ws, hub, acked))
+    try:
+        async for msg in ws:
+            if msg.type == WSMsgType.TEXT and msg.data == "ack":
+                acked.set()
+    finally:
+        hub.pages -= 1
+        feed.cancel()
+        await asyncio.gather(feed, return_exceptions=True)
+    return ws
+
+
+async def static(request: web.Request) -> web.Response:
+    """A file of the page (index.html for /)."""
+    name = request.match_info.get("name") or "index.html"
+    path = STATIC / name
+    suffix = "." + name.rsplit(".", 1)[-1]
+    if "/" in name or suffix not in CONTENT_TYPES or not path.is_file():
+        raise web.HTTPNotFound()
+    return web.Response(body=path.read_bytes(), content_type=CONTENT_TYPES[suffix],
+                        headers={"Cache-Control": "no-cache"})
+
+
+async def stats(request: web.Request) -> web.Response:
+    """The server's counters as JSON (pages, messages and bytes sent, input counters)."""
+    return web.Response(text=json.dumps(request.app["hub"].stats()), content_type="application/json")
+
+
+def app(hub: Hub) -> web.Application:
+    a = web.Application()
+    a["hub"] = hub
+    a.add_routes([web.get("/", static), web.get("/ws", websocket), web.get("/stats", stats),
+                  web.get("/{name}", static)])
+    return a

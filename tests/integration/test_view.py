@@ -1,0 +1,230 @@
+"""``pfusion view`` in a real browser: headless Chromium (Debian's ``chromium`` and
+``chromium-driver``, installed here by apt-get where missing) driven by Selenium, against
+the real view fed by the real radar chain of two_targets.toml. One scenario run, checked
+several ways: the confirmed tracks and their ids, a track that moves between two
+screenshots (drawn where the page says it is), a click that shows a track's fields, a
+stalled page that blocks nothing, a killed service whose row turns red, and the sonar
+panels. Screenshots go to out/."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import shutil
+import socket
+import subprocess
+import time
+import urllib.request
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from common.bus.transport import free_port, wait_port
+from common.wire import protocol
+from tests.harness import REPO, ROOT, SCENARIOS, Deployment
+
+TWO_TARGETS = SCENARIOS / "two_targets.toml"
+OUT = REPO / "out"
+CONFIRMED_RGB = (0x66, 0xBB, 0x6A)  # view.js COLOURS.confirmed
+DEAD_RGB = "rgb(198, 40, 40)"       # view.css tr.dead
+
+
+def _installed() -> tuple[str, str] | None:
+    browser, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    return (browser, driver) if browser and driver else None
+
+
+def _install() -> str:
+    """apt-get install chromium chromium-driver; the reason it could not, or ''."""
+    if os.geteuid() != 0 or not shutil.which("apt-get"):
+        return "not root or no apt-get"
+    for argv in (["apt-get", "update", "-qq"],
+                 ["apt-get", "install", "-y", "-qq", "chromium", "chromium-driver"]):
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=900,
+                              env={**os.environ, "DEBIAN_FRONTEND": "noninteractive"})
+        if done.returncode != 0:
+            return f"{' '.join(argv)} failed: {done.stderr.strip()[-300:]}"
+    return ""
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    """Headless Chromium under Selenium with the system chromedriver (given explicitly,
+    so Selenium Manager never downloads anything); skips with the reason where neither
+    the packages nor selenium can be had."""
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        pytest.skip("selenium is not installed: pip install -e '.[test]'")
+    paths = _installed()
+    if paths is None:
+        why = _install()
+        paths = _installed()
+        if paths is None:
+            print(f"test_view: no Chromium ({why})")
+            pytest.skip(f"cannot install chromium and chromium-driver: {why}")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = paths[0]
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--window-size=1400,1200", "--force-device-scale-factor=1"):
+        opts.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(executable_path=paths[1]), options=opts)
+    driver.set_page_load_timeout(60)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def wait(what: str, predicate: Callable[[], Any], timeout: float = 120.0) -> Any:
+    deadline = time.monotonic() + timeout
+    while not (value := predicate()):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"{what} within {timeout} s")
+        time.sleep(0.2)
+    return value
+
+
+def page_tracks(driver: Any) -> list[dict[str, Any]]:
+    """The track list of the page (DOM rows)."""
+    return driver.execute_script(
+        "return [...document.querySelectorAll('#tracks tr')].map(r => ({id: +r.dataset.id, "
+        "status: r.dataset.status, x: +r.dataset.x, y: +r.dataset.y}))")
+
+
+def canvas_xy(driver: Any, x: float, y: float) -> tuple[float, float]:
+    """Where the page draws world point (x, y) on its plan canvas (canvas pixels)."""
+    return tuple(driver.execute_script("return [planXf.x(arguments[0]), planXf.y(arguments[1])]", x, y))
+
+
+def shot(driver: Any, name: str) -> np.ndarray:
+    """Save the page to out/<name>.png; return the plan canvas' own pixels (H, W, 3)."""
+    from matplotlib.image import imread
+
+    from selenium.webdriver.common.by import By
+
+    OUT.mkdir(exist_ok=True)
+    driver.save_screenshot(str(OUT / f"{name}.png"))
+    canvas = driver.find_element(By.ID, "plan")
+    img = imread(io.BytesIO(canvas.screenshot_as_png), format="png")[:, :, :3]
+    return np.round(img * 255).astype(int)
+
+
+def near(img: np.ndarray, xy: tuple[float, float], rgb: tuple[int, int, int], r: int = 2) -> bool:
+    """A pixel of colour ``rgb`` within r of canvas point ``xy`` (1 px border offset)."""
+    cx, cy = int(round(xy[0])) + 1, int(round(xy[1])) + 1
+    patch = img[max(cy - r, 0):cy + r + 1, max(cx - r, 0):cx + r + 1]
+    return bool(np.any(np.all(np.abs(patch - np.array(rgb)) <= 3, axis=-1)))
+
+
+def stall_a_page(port: int) -> socket.socket:
+    """A WebSocket page that opens its connection and then never reads nor acks."""
+    s = socket.create_connection(("127.0.0.1", port))
+    s.sendall(b"GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    return s
+
+
+def stats(port: int) -> dict[str, Any]:
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/stats", timeout=10) as r:
+        return json.loads(r.read())
+
+
+def sonar_messages() -> list[tuple[str, dict[str, Any]]]:
+    """One scan of array a1: detections, a confirmed bearing track, a TMA solution."""
+    own = {"x": 0.0, "y": 0.0, "heading": 0.0, "speed": 3.0}
+    track = {"id": 7, "status": "confirmed", "x": [1.0, 0.0, 70.0, 0.0], "P": [1e-4, 0, 0, 0] * 4,
+             "quality": 1.0, "ambiguous": False}
+    sol = {"track": 7, "t": 40.0, "x": 6000.0, "y": 4000.0, "vx": 2.0, "vy": -1.0,
+           "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel().tolist(), "range": 7211.0, "course": 2.03,
+           "speed": 2.24, "constrained": False, "bounds": [100.0, 1e5, 0.0, 0.0, 0.0, 20.0],
+           "bounds_modified": False, "phase": "post", "residual_factor": 1.0, "legs": [0.0]}
+    v = {"v": protocol.VERSION}
+    return [("sonar/detections/a1", {**v, "t": 20.0 * k, "seq": k, "array": "a1", "own": own,
+                                     "brg": [1.0, 2.5], "amp": [70.0, 64.0]}) for k in range(3)] + [
+        ("sonar/btracks/a1", {**v, "t": 40.0, "array": "a1", "tracks": [track]}),
+        ("sonar/tma/a1", {**v, "t": 40.0, "array": "a1", "solutions": [sol]})]
+
+
+@pytest.mark.timeout(900)  # includes apt-get install chromium where it is missing
+def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    port = free_port()
+    with Deployment(tmp_path) as d:
+        view = d.start("view", "view", "--config", str(TWO_TARGETS), "--port", str(port))
+        names = d.start_services(TWO_TARGETS, ("channel-plotter", "elementary-tracker", "global-fusion"))
+        d.collect("radar/gtracks")
+        wait_port(port, 60)
+        browser.get(f"http://127.0.0.1:{port}/")
+        stalled = stall_a_page(port)
+        d.wait_alive(names)
+        args = ["simulate", "--config", str(TWO_TARGETS), "--scenario", str(TWO_TARGETS),
+                "--speed", "2", "--wait-alive", "test/collector"]
+        for name in names:
+            args += ["--wait-alive", name]
+        d.start("simulate", *args)
+
+        def same_confirmed_ids() -> list[dict[str, Any]] | None:
+            d.drain()
+            last = d.of("radar/gtracks")[-1:] or [{"tracks": []}]
+            truth = sorted(k["id"] for k in last[0]["tracks"] if k["status"] == "confirmed")
+            shown = [k for k in page_tracks(browser) if k["status"] == "confirmed"]
+            return shown if len(shown) == 2 and sorted(k["id"] for k in shown) == truth else None
+
+        first = wait("the two confirmed tracks of global fusion on the page", same_confirmed_ids)
+        assert browser.find_element(By.ID, "n-confirmed").text == "2"
+        t1 = float(browser.find_element(By.ID, "t-radar").text)
+        one = first[0]
+        before = canvas_xy(browser, one["x"], one["y"])
+        img1 = shot(browser, "view-1")
+        wait("5 s of scenario time more on the page",
+             lambda: float(browser.find_element(By.ID, "t-radar").text) >= t1 + 5.0)
+        later = {k["id"]: k for k in page_tracks(browser)}[one["id"]]
+        after = canvas_xy(browser, later["x"], later["y"])
+        img2 = shot(browser, "view-2")
+        assert math.hypot(later["x"] - one["x"], later["y"] - one["y"]) > 500.0  # ~200 m/s
+        assert math.dist(before, after) >= 3.0
+        assert near(img1, before, CONFIRMED_RGB) and near(img2, after, CONFIRMED_RGB)
+        assert not near(img2, before, CONFIRMED_RGB, r=0)  # it left its old place
+
+        ActionChains(browser).move_to_element_with_offset(
+            browser.find_element(By.ID, "plan"), after[0] - 450, after[1] - 320).click().perform()
+        details = wait("the clicked track's fields", lambda: browser.find_element(By.ID, "details").text
+                       if browser.find_element(By.ID, "details").get_attribute("data-id") else None, 30)
+        assert details.startswith(f"track {one['id']}  confirmed"), details
+        assert "sigmas" in details and "etracks   b" in details and "cycles seen" in details
+
+        assert stats(port)["pages"] == 2  # the browser and the stalled page, which blocked nothing
+        stalled.close()
+        victim = next(c for c in d.children if c.name == "elementary-tracker-b3")
+        victim.proc.kill()
+        row = "#service-rows tr[data-service='elementary_tracker'][data-instance='b3']"
+        wait("the killed tracker's row turning red", lambda: browser.execute_script(
+            f"const r = document.querySelector(\"{row}\"); "
+            f"return r && getComputedStyle(r).backgroundColor === '{DEAD_RGB}'"), 60)
+        alive = browser.execute_script(
+            "return [...document.querySelectorAll('#service-rows tr.alive')].map(r => r.dataset.service + '/' + r.dataset.instance)")
+        assert {"channel_plotter/b3", "global_fusion/main"} <= set(alive)
+        shot(browser, "view-dead")
+
+        for suffix, msg in sonar_messages():
+            d.session.put(f"{ROOT}/{suffix}", protocol.encode(msg))
+        wait("the sonar panels of array a1", lambda: browser.execute_script(
+            "return document.querySelectorAll('#array-a1 canvas').length === 2 && "
+            "topics['tma/a1'] && topics['tma/a1'].sols.length === 1"), 30)
+        counters = stats(port)
+        assert counters.get("rejected", 0) == 0
+        assert counters["in"] >= len(d.of("radar/gtracks"))  # and etracks, truth, sonar
+        busy = d.start("view-busy", "view", "--config", str(TWO_TARGETS), "--port", str(port))
+        assert busy.wait(60) == 2  # the port is the first view's
+        assert view.alive()
+        assert view.stop() == 0
+    assert f"pfusion view: cannot listen on 127.0.0.1:{port}" in (tmp_path / "view-busy.log").read_text()
