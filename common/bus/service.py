@@ -24,20 +24,12 @@ import zenoh
 
 from common.wire import protocol
 from common.bus.transport import LOG_EVERY, Inbox, LossCount, Publisher, linger, open_session
+from common.core.rejection import Rejected
 from common.deploy.config import Config
 
 Handler = Callable[[str, bytes], None]
 QueryHandler = Callable[[zenoh.Query], None]
 METRICS_PERIOD_S = 2.0
-
-
-class Rejected(ValueError):
-    """Input that decodes but cannot be used (unknown base, time going backwards...)."""
-
-    def __init__(self, reason: str, detail: str) -> None:
-        super().__init__(f"{reason}: {detail}")
-        self.reason = reason
-        self.detail = detail
 
 
 class Service:
@@ -143,9 +135,7 @@ class Service:
     def _guard(self, key: str, call: Callable[[], None]) -> None:
         try:
             call()
-        except protocol.DecodeError as e:
-            self.reject(f"decode:{e.field}", str(e), key)
-        except Rejected as e:
+        except Rejected as e:  # common.core.rejection: decode errors and core rejections
             self.reject(e.reason, e.detail, key)
         except Exception as e:  # a bug must not kill the service: count it, log the trace
             self.rejected[f"internal:{type(e).__name__}"] += 1

@@ -1,6 +1,11 @@
-"""Track-to-plot gating: pairwise innovations, Mahalanobis distances, chi-square gate.
+"""Track-to-plot gating: innovations, Mahalanobis distances, chi-square gate.
 
-Seed 001 [8]-[10] (d = i' S^-1 i with a chi-square(3) threshold), seed 000 d^2 and gate G.
+Seed 001 [8]-[10] and [48] (d = i' S^-1 i with a chi-square threshold), seed 000 d^2
+and gate G. Every tracker gates through ``pair_distances``: a cheap prefilter of its own
+(a sweep on range, an azimuth window, a bearing-only marginal) proposes candidate pairs
+(t, j), and this one batched function gives their innovations, S and d^2; the tracker
+then compares d^2 with its threshold (``gate``). The dense N x M forms
+(``pairwise_innovations``, ``mahalanobis_sq``) serve the MHT mode and the tests.
 """
 
 from __future__ import annotations
@@ -40,13 +45,70 @@ def mahalanobis_sq(y: np.ndarray, S: np.ndarray) -> np.ndarray:
     return np.einsum("nmk,nmk->nm", u, u)  # 001 [8]
 
 
+def pair_distances(
+    z_pred: np.ndarray, A: np.ndarray, z: np.ndarray, R: np.ndarray,
+    t: np.ndarray, j: np.ndarray, angle_idx: Sequence[int] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For K candidate pairs (t_k, j_k): innovations y = z_j - z_pred_t (001 [9], 000 y;
+    angle_idx components wrapped to [-pi, pi)), S = A_t + R_j (001 [10], 000 S =
+    H P H' + R) and d^2 = y' S^-1 y (001 [8], [48]; 000 d^2), shapes (K, m), (K, m, m), (K,).
+
+    A (N, m, m) is each track's projected covariance H P H'; R is (M, m, m), or (M, m)
+    for diagonal measurement covariances (variances)."""
+    y = np.asarray(z, dtype=float)[j] - np.asarray(z_pred, dtype=float)[t]
+    for i in angle_idx:
+        y[:, i] = wrap_pi(y[:, i])
+    S = A[t].copy()
+    if R.ndim == 2:
+        d = np.arange(R.shape[1])
+        S[:, d, d] += R[j]
+    else:
+        S += R[j]
+    if y.shape[0] == 0:
+        return y, S, np.zeros(0)
+    d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])  # 001 [8]
+    return y, S, d2
+
+
+def overlap_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs (i, j), i < j in index order of the sort, of closed intervals
+    [lo, hi] that intersect, by a sort-and-sweep (no N^2 matrix). Returns original
+    indices (a, b) with lo[a] <= lo[b]."""
+    order = np.argsort(lo, kind="stable")
+    lo_s, hi_s = lo[order], hi[order]
+    end = np.searchsorted(lo_s, hi_s, side="right")  # j < end: lo_j <= hi_i
+    start = np.arange(lo_s.size) + 1
+    count = np.maximum(end - start, 0)
+    total = int(count.sum())
+    if total == 0:
+        e = np.zeros(0, dtype=np.intp)
+        return e, e
+    i = np.repeat(np.arange(lo_s.size), count)
+    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    j = start[i] + offset
+    return order[i], order[j]
+
+
+def window_pairs(lo: np.ndarray, hi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs (i, j) with lo[i] <= v[j] <= hi[i], by sorting v (no N x M matrix): the
+    sweep that proposes candidate pairs to ``pair_distances`` (cost O((N + M) log M + K))."""
+    order = np.argsort(v, kind="stable")
+    v_s = v[order]
+    start = np.searchsorted(v_s, lo, side="left")
+    count = np.maximum(np.searchsorted(v_s, hi, side="right") - start, 0)
+    total = int(count.sum())
+    i = np.repeat(np.arange(lo.size), count)
+    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    return i, order[start[i] + offset]
+
+
 def chi2_gate(prob: float, dof: int) -> float:
     """Gate threshold gamma with P(chi2_dof <= gamma) = prob (001: chi-square, 3 dof)."""
     return float(2.0 * gammaincinv(dof / 2.0, prob))  # scipy.stats.chi2.ppf, without its import cost
 
 
 def gate(d2: np.ndarray, threshold: ArrayLike) -> np.ndarray:
-    """Boolean gate mask d2 <= threshold. threshold is a scalar or a per-track (N,)
-    array (e.g. seed 000's G, which depends on |S| of each track)."""
+    """Boolean gate mask d2 <= threshold. threshold is a scalar, one value per pair (the
+    shape of d2), or for an (N, M) d2 one per track (N,) (seed 000's G depends on |S|)."""
     thr = np.asarray(threshold, dtype=float)
-    return d2 <= (thr[:, None] if thr.ndim == 1 else thr)
+    return d2 <= (thr[:, None] if thr.ndim == 1 and d2.ndim == 2 else thr)

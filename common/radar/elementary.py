@@ -40,9 +40,10 @@ from common.core.angles import wrap_2pi, wrap_pi
 from common.core.assignment import nearest_neighbour
 from common.core.crossing import CrossingManager, CrossingParams
 from common.radar.elementary_init import compatible, initial_state, propagate
-from common.core.gating import chi2_gate
+from common.core.gating import chi2_gate, gate, overlap_pairs, pair_distances, window_pairs
+from common.core.rejection import Rejected
 from common.core.motion import bistatic_F, bistatic_Q
-from common.radar.plot_fusion import LateInput, Plots, overlap_pairs, window_pairs
+from common.radar.plot_fusion import Plots
 from common.core.track_table import Status, TrackTable
 
 H = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11], [22]
@@ -154,16 +155,13 @@ def gate_pairs(z_pred: np.ndarray, S_pred: np.ndarray, plots: Plots, gamma: floa
         return e, e, np.zeros(0)
     half = np.sqrt(gamma * (S_pred[:, 0, 0] + plots.srb.max() ** 2))
     t, j = window_pairs(z_pred[:, 0] - half, z_pred[:, 0] + half, plots.rb)
-    y = plots.y
-    i = y[j] - z_pred[t]  # 001 [9]
+    i = plots.y[j] - z_pred[t]  # 001 [9]
     i[:, AZ] = wrap_pi(i[:, AZ])
-    sig2 = np.square(plots.sigma)[j]
-    ok = np.all(i**2 <= gamma * (S_pred[t][:, [0, 1, 2], [0, 1, 2]] + sig2), axis=1)
-    t, j, i, sig2 = t[ok], j[ok], i[ok], sig2[ok]
-    S = S_pred[t].copy()
-    S[:, [0, 1, 2], [0, 1, 2]] += sig2  # 001 [10]
-    d = np.einsum("kp,kp->k", i, np.linalg.solve(S, i[..., None])[..., 0])  # 001 [8]
-    ok = d <= gamma
+    sig2 = np.square(plots.sigma)
+    ok = np.all(i**2 <= gamma * (S_pred[t][:, [0, 1, 2], [0, 1, 2]] + sig2[j]), axis=1)
+    t, j = t[ok], j[ok]
+    _, _, d = pair_distances(z_pred, S_pred, plots.y, sig2, t, j, angle_idx=(AZ,))  # 001 [8]-[10]
+    ok = gate(d, gamma)
     return t[ok], j[ok], d[ok]
 
 
@@ -184,7 +182,7 @@ class ElementaryTracker:
     def step(self, t: float, plots: Plots) -> ElementaryTracks:
         """Process the fused plots of time t; returns every live track."""
         if self.t is not None and t <= self.t:
-            raise LateInput("time_backwards", f"fused scan t={t} not after t={self.t}")
+            raise Rejected("time_backwards", f"fused scan t={t} not after t={self.t}")
         tab = self.table
         idx = tab.active_indices()
         x, P = self._predict(idx, t)

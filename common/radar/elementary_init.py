@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
-from common.radar.plot_fusion import Plots, window_pairs
+from common.core.gating import window_pairs
+from common.radar.plot_fusion import Plots
 
 
 def propagate(prev: Plots, dt: float, sigma_gamma: float, sigma_omega: float

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.core.angles import wrap_pi
+from common.core.gating import pair_distances
 from common.radar.bistatic import project, project_jacobian
 from common.radar.global_init import azimuth_pairs
 
@@ -76,10 +76,8 @@ def projections(
 
 def distance(y_pred: np.ndarray, GPG: np.ndarray, y: np.ndarray, R: np.ndarray) -> np.ndarray:
     """001 [48] for aligned pairs: gamma = v' (G P G' + R)^-1 v, v = y - g(x~) (P,)."""
-    v = y - y_pred
-    v[:, 2] = wrap_pi(v[:, 2])
-    S = GPG + R
-    return np.einsum("pi,pi->p", v, np.linalg.solve(S, v[..., None])[..., 0])  # [48]
+    k = np.arange(y.shape[0])
+    return pair_distances(y_pred, GPG, y, R, k, k, angle_idx=(2,))[2]  # [48]
 
 
 def gated_pairs(

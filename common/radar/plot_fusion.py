@@ -29,17 +29,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import overlap_pairs
+from common.core.rejection import Rejected
 
 COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz")
-
-
-class LateInput(ValueError):
-    """A channel message that cannot enter any open scan; ``reason`` names why."""
-
-    def __init__(self, reason: str, detail: str) -> None:
-        super().__init__(f"{reason}: {detail}")
-        self.reason = reason
-        self.detail = detail
 
 
 @dataclass(frozen=True)
@@ -91,25 +84,6 @@ class Plots:
     def sigma(self) -> np.ndarray:
         """Standard deviations (N, 3)."""
         return np.column_stack([self.srb, self.svb, self.saz])
-
-
-def overlap_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """All pairs (i, j), i < j in index order of the sort, of closed intervals
-    [lo, hi] that intersect, by a sort-and-sweep (no N^2 matrix). Returns original
-    indices (a, b) with lo[a] <= lo[b]."""
-    order = np.argsort(lo, kind="stable")
-    lo_s, hi_s = lo[order], hi[order]
-    end = np.searchsorted(lo_s, hi_s, side="right")  # j < end: lo_j <= hi_i
-    start = np.arange(lo_s.size) + 1
-    count = np.maximum(end - start, 0)
-    total = int(count.sum())
-    if total == 0:
-        e = np.zeros(0, dtype=np.intp)
-        return e, e
-    i = np.repeat(np.arange(lo_s.size), count)
-    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
-    j = start[i] + offset
-    return order[i], order[j]
 
 
 def compatible_pairs(p: Plots, channel: np.ndarray, n_sigma: float = 2.0
@@ -222,14 +196,14 @@ class PlotFusion:
 
     def push(self, channel: str, t: float, plots: Plots) -> list[tuple[float, Plots]]:
         """Add one channel's plots at time t; returns the scans completed by it, in time
-        order, as (t, fused plots). Raises LateInput for an unknown channel, a time not
+        order, as (t, fused plots). Raises Rejected for an unknown channel, a time not
         after that channel's last, or a scan already emitted."""
         if channel not in self._last:
-            raise LateInput("unknown_channel", f"channel '{channel}' is not configured")
+            raise Rejected("unknown_channel", f"channel '{channel}' is not configured")
         if t <= self._last[channel]:
-            raise LateInput("time_backwards", f"channel {channel}: t={t} after t={self._last[channel]}")
+            raise Rejected("time_backwards", f"channel {channel}: t={t} after t={self._last[channel]}")
         if t <= self._emitted:
-            raise LateInput("late_scan", f"channel {channel}: scan t={t} already published")
+            raise Rejected("late_scan", f"channel {channel}: scan t={t} already published")
         self._last[channel] = t
         self._newest = max(self._newest, t)
         self._pending.setdefault(t, {})[channel] = plots
@@ -242,15 +216,3 @@ class PlotFusion:
             out.append((s, fuse_scan(per_channel, len(self.channels), self.p, self.params.n_sigma)))
             self._emitted = s
         return out
-
-
-def window_pairs(lo: np.ndarray, hi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """All pairs (i, j) with lo[i] <= v[j] <= hi[i], by sorting v (no N x M matrix)."""
-    order = np.argsort(v, kind="stable")
-    v_s = v[order]
-    start = np.searchsorted(v_s, lo, side="left")
-    count = np.maximum(np.searchsorted(v_s, hi, side="right") - start, 0)
-    total = int(count.sum())
-    i = np.repeat(np.arange(lo.size), count)
-    offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
-    return i, order[start[i] + offset]

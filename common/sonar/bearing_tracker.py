@@ -37,6 +37,7 @@ import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
 from common.core.assignment import gnn
+from common.core.gating import gate, pair_distances
 from common.sonar.bearing_crossing import BearingCrossing
 from common.sonar.bearing_history import BearingHistory
 from common.sonar.bearing_model import (
@@ -51,6 +52,7 @@ from common.core.crossing import CrossingParams
 from common.core.kalman import predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.multiline import NEW, MultiLineGrouper, group_means
+from common.core.rejection import Rejected
 from common.core.track_table import Status, TrackTable
 
 
@@ -95,10 +97,6 @@ class TrackerParams:
     ml_brg_tol_deg: float = 2.0
     ml_rate_tol_deg_s: float = 0.1
     history_keep_deleted: int = 64
-
-
-class TimeOrderError(ValueError):
-    """A detection list whose time is not after the previous one."""
 
 
 @dataclass(frozen=True)
@@ -208,7 +206,7 @@ class BearingTracker:
         frequencies Hz for narrowband; sbrg, when given, the sensor's bearing sigmas
         used instead of the array law) and return the tracks."""
         if self.t is not None and not t > self.t:
-            raise TimeOrderError(f"t={t} is not after the previous cycle t={self.t}")
+            raise Rejected("time_order", f"t={t} is not after the previous cycle t={self.t}")
         if self.narrowband and freq is None:
             raise ValueError("narrowband tracking needs detection frequencies")
         p, tab, H = self.params, self.table, self.H
@@ -298,12 +296,9 @@ class BearingTracker:
         d2b = yb**2 / (A[:, 0, 0, None] + Rd[None, :, 0])
         G_max = gate_value(p.p_d, p.p_fa, self.beam, np.prod(Rd, axis=1), m)
         ti, dj = np.nonzero(d2b <= G_max[None, :])
-        y = z[dj] - zp[ti]  # 000 y = z - H x^pre
-        y[:, 0] = wrap_pi(y[:, 0])
-        S = A[ti] + _diag(Rd[dj])  # 000 S = H P^pre H' + R
-        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])  # 000 d_1^2
+        y, S, d2 = pair_distances(zp, A, z, Rd, ti, dj, angle_idx=(0,))  # 000 y, S, d_1^2
         detS = np.linalg.det(S)
-        ok = d2 <= gate_value(p.p_d, p.p_fa, self.beam, detS, m)  # 000 gate G
+        ok = gate(d2, gate_value(p.p_d, p.p_fa, self.beam, detS, m))  # 000 gate G
         ti, dj, y, d2, detS = ti[ok], dj[ok], y[ok], d2[ok], detS[ok]
         gated[dj[self.table.status[idx[ti]] == Status.CONFIRMED]] = True
         cost = np.full((N, M), np.inf)

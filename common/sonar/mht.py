@@ -51,9 +51,10 @@ import numpy as np
 from common.core.angles import wrap_2pi
 from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
 from common.core.kalman import predict, update
+from common.core.rejection import Rejected
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.bearing_model import detection_probability, linear_array_sigma, measurement_matrix
-from common.sonar.bearing_tracker import Cycle, TimeOrderError, TrackerParams
+from common.sonar.bearing_tracker import Cycle, TrackerParams
 from common.sonar.mht_conflict import unresolved_probability
 from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
                                          miss_weights, mixture_moments, pair_distance2, prune,
@@ -177,7 +178,7 @@ class MhtTracker:
              sbrg: np.ndarray | None = None) -> Cycle:
         """Process the detection list of time t (as BearingTracker.step)."""
         if self.t is not None and not t > self.t:
-            raise TimeOrderError(f"t={t} is not after the previous cycle t={self.t}")
+            raise Rejected("time_order", f"t={t} is not after the previous cycle t={self.t}")
         if self.narrowband and freq is None:
             raise ValueError("narrowband tracking needs detection frequencies")
         mp, H, tr = self.mp, self.H, self.tr

@@ -21,19 +21,11 @@ from typing import Any
 
 import numpy as np
 
+from common.core.rejection import Rejected
 from common.sonar.ctma import CtmaConfig, CycleOutput, TmaTracker
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 
 VERSION = 1
-
-
-class TmaInputError(ValueError):
-    """Input the manager cannot use; ``reason`` is the counter name."""
-
-    def __init__(self, reason: str, detail: str) -> None:
-        super().__init__(f"{reason}: {detail}")
-        self.reason = reason
-        self.detail = detail
 
 
 @dataclass(frozen=True)
@@ -82,13 +74,13 @@ def make_bounds(p: BoundsParams | Mapping[str, Any]) -> Bounds:
     get = (lambda k: getattr(p, k)) if isinstance(p, BoundsParams) else p.__getitem__
     r0, r1, k0, k1, v0, v1 = (float(get(k)) for k in BOUNDS_FIELDS)
     if not all(np.isfinite((r0, r1, k0, k1, v0, v1))):
-        raise TmaInputError("bad_bounds", "bounds must be finite")
+        raise Rejected("bad_bounds", "bounds must be finite")
     if not 0.0 <= r0 < r1:
-        raise TmaInputError("bad_bounds", f"need 0 <= r_min < r_max, got {r0}, {r1}")
+        raise Rejected("bad_bounds", f"need 0 <= r_min < r_max, got {r0}, {r1}")
     if not 0.0 <= v0 < v1:
-        raise TmaInputError("bad_bounds", f"need 0 <= speed_min < speed_max, got {v0}, {v1}")
+        raise Rejected("bad_bounds", f"need 0 <= speed_min < speed_max, got {v0}, {v1}")
     if not (0.0 <= k0 <= TWO_PI and 0.0 <= k1 <= TWO_PI):
-        raise TmaInputError("bad_bounds", f"courses must be in [0, 2pi], got {k0}, {k1}")
+        raise Rejected("bad_bounds", f"courses must be in [0, 2pi], got {k0}, {k1}")
     return Bounds(r0, r1, k0, k1, v0, v1)
 
 
@@ -178,15 +170,15 @@ class TmaManager:
     def push(self, msg: Mapping[str, Any]) -> None:
         """Queue a decoded btracks message after checking it (time order, array, P)."""
         if msg["array"] != self.array:
-            raise TmaInputError("unknown_array", f"array '{msg['array']}'")
+            raise Rejected("unknown_array", f"array '{msg['array']}'")
         if not msg["t"] > self.t_pushed:
-            raise TmaInputError("time_order", f"t={msg['t']} is not after t={self.t_pushed}")
+            raise Rejected("time_order", f"t={msg['t']} is not after t={self.t_pushed}")
         for tr in msg["tracks"]:
             n = len(tr["x"])
             if n < 2 or len(tr["P"]) != n * n or not tr["P"][0] > 0:
-                raise TmaInputError("bad_btrack", f"track {tr['id']}: x needs >= 2 entries, P n*n, P[0] > 0")
+                raise Rejected("bad_btrack", f"track {tr['id']}: x needs >= 2 entries, P n*n, P[0] > 0")
             if not 0.0 <= tr["x"][0] <= TWO_PI:
-                raise TmaInputError("bad_btrack", f"track {tr['id']}: bearing x[0] not in [0, 2pi]")
+                raise Rejected("bad_btrack", f"track {tr['id']}: bearing x[0] not in [0, 2pi]")
         self.t_pushed = msg["t"]
         self.pending.append(dict(msg))
 
@@ -240,7 +232,7 @@ class TmaManager:
         """Apply a decoded bounds message; returns the tracks changed.
 
         Without ``track``: the array's default for new tracks and every live track; with
-        it: that live track only (unknown track: TmaInputError).
+        it: that live track only (unknown track: Rejected).
         """
         b = make_bounds(msg)
         tid = msg.get("track")
@@ -250,7 +242,7 @@ class TmaManager:
         elif tid in self.tracks:
             ids = [tid]
         else:
-            raise TmaInputError("unknown_track", f"no TMA for track {tid}")
+            raise Rejected("unknown_track", f"no TMA for track {tid}")
         for i in ids:
             self.tracks[i].tracker.bounds = b
         return ids

@@ -18,18 +18,19 @@ import msgpack
 import numpy as np
 
 from common.core.angles import TWO_PI
+from common.core.rejection import Rejected
 
 VERSION = 1
 MAX_PAYLOAD = 16 * 1024 * 1024
 
 
-class DecodeError(ValueError):
-    """A payload that does not match its schema; ``field`` names the culprit."""
+class DecodeError(Rejected):
+    """A payload that does not match its schema; ``field`` names the culprit. Counted as
+    ``decode:<field>``."""
 
-    def __init__(self, field: str, reason: str) -> None:
-        super().__init__(f"{field}: {reason}")
+    def __init__(self, field: str, why: str) -> None:
+        super().__init__(f"decode:{field}", f"{field}: {why}", message=f"{field}: {why}")
         self.field = field
-        self.reason = reason
 
 
 @dataclass(frozen=True)

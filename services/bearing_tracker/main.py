@@ -16,7 +16,7 @@ import zenoh
 
 from common.wire import protocol
 from common.wire.sonar_messages import btracks_message
-from common.sonar.bearing_tracker import BearingTracker, TimeOrderError
+from common.sonar.bearing_tracker import BearingTracker
 from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams
 from common.cli import add_common, load_config
 from common.deploy.config import section
@@ -64,11 +64,8 @@ def main(args: argparse.Namespace) -> int:
             freq = freq[good] if freq is not None else None
             sbrg = sbrg[good] if sbrg is not None else None
         own = msg["own"]
-        try:
-            cycle = core.step(msg["t"], brg, amp, own["heading"], own["x"], own["y"],
-                              freq if core.narrowband else None, sbrg)
-        except TimeOrderError as e:
-            raise Rejected("time_order", str(e)) from None
+        cycle = core.step(msg["t"], brg, amp, own["heading"], own["x"], own["y"],
+                          freq if core.narrowband else None, sbrg)
         svc.last_t = msg["t"]
         svc.publish(f"sonar/btracks/{arr.id}", btracks_message(arr.id, cycle, core.narrowband))
 

@@ -12,9 +12,10 @@ import argparse
 from common.wire import protocol
 from common.cli import add_base_service, load_config
 from common.deploy.config import section
-from common.radar.plot_fusion import LateInput, PlotFusion, PlotterParams
+from common.radar.plot_fusion import PlotFusion, PlotterParams
 from common.wire.radar_chain import fused_message, plots_of
-from common.bus.service import Rejected, Service
+from common.bus.service import Service
+from common.core.rejection import Rejected
 
 
 add_arguments = add_base_service  # --config, --connect, --base
@@ -33,10 +34,7 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_base", f"base '{msg['base']}' on a plotter of '{base.id}'")
         if msg["channel"] != key.rsplit("/", 1)[-1]:
             raise Rejected("channel_mismatch", f"channel '{msg['channel']}' published on {key}")
-        try:
-            scans = core.push(msg["channel"], msg["t"], plots_of(msg))
-        except LateInput as e:
-            raise Rejected(e.reason, e.detail) from None
+        scans = core.push(msg["channel"], msg["t"], plots_of(msg))
         for t, fused in scans:
             svc.last_t = t
             svc.publish(f"radar/fused/{base.id}", fused_message(base.id, t, fused))

@@ -14,9 +14,9 @@ from common.wire import protocol
 from common.cli import add_base_service, load_config
 from common.deploy.config import section
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.plot_fusion import LateInput
 from common.wire.radar_chain import etracks_message, plots_of
-from common.bus.service import Rejected, Service
+from common.bus.service import Service
+from common.core.rejection import Rejected
 
 
 add_arguments = add_base_service  # --config, --connect, --base
@@ -33,10 +33,7 @@ def main(args: argparse.Namespace) -> int:
         msg = protocol.decode("fused", payload)
         if msg["base"] != base.id:
             raise Rejected("unknown_base", f"base '{msg['base']}' on a tracker of '{base.id}'")
-        try:
-            tracks = core.step(msg["t"], plots_of(msg))
-        except LateInput as e:
-            raise Rejected(e.reason, e.detail) from None
+        tracks = core.step(msg["t"], plots_of(msg))
         svc.last_t = tracks.t
         svc.publish(f"radar/etracks/{base.id}", etracks_message(base.id, tracks))
 

@@ -12,7 +12,6 @@ Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tm
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -21,8 +20,9 @@ from common.cli import add_common, load_config
 from common.deploy.config import Config, ConfigError, section
 from common.sonar.ctma import CtmaConfig
 from common.sonar.ctma_bounds import Bounds
-from common.bus.service import Rejected, Service
-from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaInputError, TmaManager, TmaParams, make_bounds
+from common.bus.service import Service
+from common.core.rejection import Rejected
+from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaManager, TmaParams, make_bounds
 
 HISTORY_TIMEOUT_S = 2.0
 SUBTABLES = ("ctma", "bounds")
@@ -65,16 +65,9 @@ def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds]:
     merged = {**bounds, **_table(cfg.doc, f"sonar.tma.bounds.{array}")}
     try:
         b = make_bounds(_leaf_section(cfg, f"sonar.tma.bounds.{array}", merged, BoundsParams))
-    except TmaInputError as e:
+    except Rejected as e:
         raise ConfigError(f"sonar.tma.bounds.{array}", e.detail) from None
     return params, core, b
-
-
-def _checked(call: Callable[[], None]) -> None:
-    try:
-        call()
-    except TmaInputError as e:
-        raise Rejected(e.reason, e.detail) from None
 
 
 def main(args: argparse.Namespace) -> int:
@@ -113,13 +106,13 @@ def main(args: argparse.Namespace) -> int:
         process()
 
     def on_btracks(key: str, payload: bytes) -> None:
-        _checked(lambda: mgr.push(protocol.decode("btracks", payload)))
+        mgr.push(protocol.decode("btracks", payload))
         process()
 
     def on_bounds(key: str, payload: bytes) -> None:
         msg = protocol.decode("tma_bounds", payload)
         ids: list[int] = []
-        _checked(lambda: ids.extend(mgr.set_bounds(msg)))
+        ids.extend(mgr.set_bounds(msg))
         svc.log.info("bounds %s for tracks %s", [msg[k] for k in BOUNDS_FIELDS], ids)
 
     svc.subscribe(f"sonar/detections/{arr.id}", on_det)

@@ -25,7 +25,8 @@ from common.core.angles import wrap_pi
 from common.wire import protocol
 from common.deploy.config import ConfigError, parse
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
-from common.sonar.tma_manager import TmaInputError, TmaManager, TmaParams, make_bounds, thin
+from common.core.rejection import Rejected
+from common.sonar.tma_manager import TmaManager, TmaParams, make_bounds, thin
 from tests.harness import ROOT, SCENARIOS, Deployment
 from services.tma.main import tma_config
 
@@ -109,7 +110,7 @@ def test_own_log_is_bounded():
 def test_push_rejects_unusable_btracks(msg, reason):
     mgr = TmaManager("a1")
     mgr.push(btracks(10.0, []))
-    with pytest.raises(TmaInputError) as e:
+    with pytest.raises(Rejected) as e:
         mgr.push(msg)
     assert e.value.reason == reason
     assert len(mgr.pending) == 1
@@ -217,7 +218,7 @@ def test_bounds_messages_apply_to_all_or_one_track():
     assert not s1["constrained"] and s1["bounds"][0] == 1000.0
     assert s2["constrained"] and s2["bounds"][0] == 8000.0 and s2["range"] >= 8000.0 - 1e-6
     assert s2["phase"] == "pre" and s2["residual_factor"] > 1.0
-    with pytest.raises(TmaInputError, match="unknown_track"):
+    with pytest.raises(Rejected, match="unknown_track"):
         mgr.set_bounds(_bounds_msg(track=9))
 
 
@@ -248,7 +249,7 @@ def test_bounds_schema_requires_every_bound():
     {"r_min": 20000.0}, {"r_min": 30000.0}, {"speed_min": 8.0}, {"speed_min": 9.0},
 ])
 def test_bounds_context_checks(change):
-    with pytest.raises(TmaInputError, match="bad_bounds"):
+    with pytest.raises(Rejected, match="bad_bounds"):
         make_bounds(_bounds_msg(**change))
 
 

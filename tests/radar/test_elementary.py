@@ -11,7 +11,8 @@ from common.radar.elementary import (
     H, ElementaryParams, ElementaryTracker, RadarCrossingParams, drop_acceleration, gate_pairs,
 )
 from common.radar.elementary_init import compatible, initial_state, propagate
-from common.radar.plot_fusion import LateInput, Plots
+from common.core.rejection import Rejected
+from common.radar.plot_fusion import Plots
 from common.core.track_table import Status
 
 SIG = (100.0, 2.0, 0.01)
@@ -182,7 +183,7 @@ def test_several_tracks_from_one_plot_and_unsupported_ones_die() -> None:
 def test_time_must_increase() -> None:
     trk = ElementaryTracker()
     trk.step(1.0, Plots.empty())
-    with pytest.raises(LateInput, match="time_backwards"):
+    with pytest.raises(Rejected, match="time_backwards"):
         trk.step(1.0, Plots.empty())
 
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from common.core.rejection import Rejected
 from common.radar.plot_fusion import (
-    LateInput, PlotFusion, Plots, accept, aggregate, fuse, fuse_scan, overlap_pairs,
-    window_pairs,
+    PlotFusion, Plots, accept, aggregate, fuse, fuse_scan,
 )
 
 
@@ -109,21 +109,6 @@ def test_fuse_scan_two_channels_keeps_singles() -> None:
     assert f3.n_ch.tolist() == [2]
 
 
-def test_sweep_pairs_match_brute_force() -> None:
-    rng = np.random.default_rng(3)
-    lo = rng.uniform(0, 100, 200)
-    hi = lo + rng.uniform(0, 5, 200)
-    a, b = overlap_pairs(lo, hi)
-    got = {tuple(sorted(p)) for p in zip(a.tolist(), b.tolist())}
-    want = {(i, j) for i in range(200) for j in range(i + 1, 200)
-            if lo[i] <= hi[j] and lo[j] <= hi[i]}
-    assert got == want
-    v = rng.uniform(0, 100, 150)
-    i, j = window_pairs(lo, hi, v)
-    assert set(zip(i.tolist(), j.tolist())) == {
-        (p, q) for p in range(200) for q in range(150) if lo[p] <= v[q] <= hi[p]}
-
-
 def test_scan_assembly_complete_and_later_time() -> None:
     core = PlotFusion(["a", "b", "c"], p=1)
     one = plots([BASE])
@@ -134,11 +119,11 @@ def test_scan_assembly_complete_and_later_time() -> None:
     assert core.push("a", 2.0, one) == []
     out = core.push("a", 3.0, one)  # a later time completes t = 2 (b, c empty)
     assert [t for t, _ in out] == [2.0] and len(out[0][1]) == 0  # 1 < n - p: rejected
-    with pytest.raises(LateInput, match="time_backwards"):
+    with pytest.raises(Rejected, match="time_backwards"):
         core.push("a", 3.0, one)
-    with pytest.raises(LateInput, match="late_scan"):
+    with pytest.raises(Rejected, match="late_scan"):
         core.push("b", 2.0, one)
-    with pytest.raises(LateInput, match="unknown_channel"):
+    with pytest.raises(Rejected, match="unknown_channel"):
         core.push("z", 4.0, one)
     out = core.push("b", 3.0, Plots.empty()) + core.push("c", 3.0, Plots.empty())
     assert [t for t, _ in out] == [3.0]  # empty channel messages still complete a scan

@@ -18,7 +18,8 @@ from common.sonar.bearing_model import (
     quality_increment,
     thresholds,
 )
-from common.sonar.bearing_tracker import BearingTracker, TimeOrderError, TrackerParams
+from common.core.rejection import Rejected
+from common.sonar.bearing_tracker import BearingTracker, TrackerParams
 from common.core.crossing import CrossingParams
 from common.sonar.multiline import NEW, MultiLineGrouper
 
@@ -142,7 +143,7 @@ def test_tentative_deleted_below_T1() -> None:
 def test_time_must_increase() -> None:
     tr = BearingTracker(BB, "cylindrical", 0.01)
     tr.step(5.0, np.array([1.0]), np.array([100.0]), 0.0)
-    with pytest.raises(TimeOrderError):
+    with pytest.raises(Rejected, match="time_order"):
         tr.step(5.0, np.array([1.0]), np.array([100.0]), 0.0)
 
 
