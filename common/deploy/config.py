@@ -20,6 +20,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from common.deploy.ranges import out_of_range
+
 # A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
 # whitespace and control characters (ids go into command lines and credential files).
 KEY_CHUNK = re.compile(r"^(?!@)[^/*$?#\s\x00-\x1f\x7f]+$")
@@ -183,14 +185,20 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
 def section(cfg: Config, dotted: str, cls: type[T]) -> T:
     """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent).
 
-    Nested tables are sections of their own (common.deploy.sections checks their names)."""
+    Nested tables are sections of their own (common.deploy.sections checks their names).
+    Values outside their declared interval (common.deploy.ranges) are rejected."""
     table: Any = cfg.doc
     for part in dotted.split("."):
         table = table.get(part, {}) if isinstance(table, dict) else None
         if table is None:
             raise ConfigError(dotted, "expected a table")
     _check_table(table, dotted)
-    return _build(cls, {k: v for k, v in table.items() if not isinstance(v, dict)}, dotted)
+    given = {k: v for k, v in table.items() if not isinstance(v, dict)}
+    obj = _build(cls, given, dotted)
+    bad = out_of_range(dotted, {k: getattr(obj, k) for k in given})
+    if bad is not None:
+        raise ConfigError(f"{dotted}.{bad[0]}", bad[1])
+    return obj
 
 
 def _endpoint(ep: Any, key: str) -> str:

@@ -11,6 +11,7 @@ from typing import Any
 
 from common.sonar.mht import MhtParams, SonarTrackerParams
 from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
+from common.deploy.ranges import ranges_of
 from common.core.crossing import CrossingParams
 from common.sonar.ctma import CtmaConfig
 from common.radar.elementary import ElementaryParams, RadarCrossingParams
@@ -118,8 +119,8 @@ def markdown() -> str:
         "file also has `[zenoh]` (connect, listen, root), `[[radar.base]]` (id, tx, rx,",
         "channels, p), `[[sonar.array]]` (id, kind, sigma0) and, for the simulator, `[sim]`",
         "(docs/scenarios.md). Every table is optional; absent keys take the defaults below.",
-        "An unknown table or key, or a value of the wrong type, stops the service with",
-        "exit code 2 and a message naming the key.",
+        "An unknown table or key, a value of the wrong type, or a number outside its range",
+        "(common.deploy.ranges) stops the service with exit code 2 and a message naming the key.",
         "",
         "Security (docs/security.md): `[zenoh.auth]` and `[zenoh.tls]` below; file paths",
         "are relative to the deployment file's directory. `[[site]]` lists the receiver",
@@ -130,9 +131,13 @@ def markdown() -> str:
     for name, cls in {**SECURITY, **SECTIONS}.items():
         meanings = _meanings(cls)
         hints = typing.get_type_hints(cls)
+        ranges = ranges_of(name)
         lines += ["", f"## [{name}]", "", (cls.__doc__ or "").strip().splitlines()[0], "",
-                  "| key | type | default | meaning |", "| --- | --- | --- | --- |"]
+                  "| key | type | default | unit | range | meaning |",
+                  "| --- | --- | --- | --- | --- | --- |"]
         for f in dataclasses.fields(cls):
-            lines.append(f"| {f.name} | {_type_name(hints[f.name])} | {_default(f)} | "
-                         f"{_describe(f.name, meanings)} |")
+            r = ranges.get(f.name)
+            unit, interval = (r.unit, str(r)) if r is not None else ("", "")
+            lines.append(f"| {f.name} | {_type_name(hints[f.name])} | {_default(f)} | {unit} | "
+                         f"{interval} | {_describe(f.name, meanings)} |")
     return "\n".join(lines) + "\n"
