@@ -36,7 +36,8 @@ from common.deploy.config import load, section
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.radar.global_fusion import FusionParams
 from common.sim.simulator import load_scenario, run_scenario
-from common.wire.radar_chain import RadarChain, etracks_message, plots_of
+from common.wire.radar_chain import RadarChain
+from common.wire.radar_messages import gtracks_message, plots_of
 
 REPO = Path(__file__).resolve().parents[1]
 WARMUP = 30.0
@@ -79,7 +80,9 @@ def run(name: str, seed: int, scans: int | None) -> Row:
     """The chain on scenarios/<name>.toml, scored."""
     import tomllib
 
-    from services.evaluate.main import base_information, truth_state
+    from common.evaluation.pcrlb import base_information
+    from common.sim.scenario import radar_scene
+    from common.wire.sim_messages import truth_state
 
     path = REPO / "scenarios" / f"{name}.toml"
     cfg = load(path)
@@ -104,7 +107,7 @@ def run(name: str, seed: int, scans: int | None) -> Row:
                 tracks = chain.trackers[base].step(tf, f)
                 t2 = time.process_time()
                 cost["tracker"] += t2 - t1
-                out += chain.fusion.push(etracks_message(base, tracks))
+                out += [gtracks_message(g) for g in chain.fusion.push(base, tracks)]
                 t1 = time.process_time()
                 cost["fusion"] += t1 - t2
         g = next((m for m in out if m["t"] == t), {"tracks": []})
@@ -121,7 +124,7 @@ def run(name: str, seed: int, scans: int | None) -> Row:
             false.append(len(conf) - res.rows.size)
     p = section(cfg, "radar.fusion", FusionParams)
     sc = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
-                       base_information(cfg), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), WARMUP)
+                       base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), WARMUP)
     s = ev.metrics.summary()
     n_t = len(ev.truth)
     ratio = np.array([v.rmse / v.bound for v in sc.values()])

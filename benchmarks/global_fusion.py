@@ -29,7 +29,7 @@ from common.deploy.config import load, section
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
 from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.radar.plot_fusion import Plots
-from common.wire.radar_chain import etracks_message
+from common.wire.radar_messages import gtracks_message
 from common.evaluation.pcrlb import Evaluation, score_targets
 
 DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"
@@ -57,11 +57,11 @@ def core_benchmark(n: int, cycles: int = 40) -> tuple[float, float, float]:
             sig = np.tile(SIG, (n, 1))
             r = trk[b.id].step(float(k), Plots(y[:, 0], y[:, 1], y[:, 2] % (2 * np.pi), sig[:, 0],
                                                sig[:, 1], sig[:, 2], np.full(n, 3)))
-            msgs.append(etracks_message(b.id, r))
+            msgs.append((b.id, r))
         for m in msgs[:-1]:
-            gf.push(m)
+            gf.push(*m)
         t0 = time.perf_counter()
-        out = gf.push(msgs[-1])[0]
+        out = gtracks_message(gf.push(*msgs[-1])[0])
         times.append(time.perf_counter() - t0)
         if k >= 10:
             x = np.array([tr["x"] for tr in out["tracks"] if tr["status"] == "confirmed"])
@@ -96,11 +96,12 @@ def chain_benchmark() -> None:
                np.array([k["id"] for k in conf], dtype=np.int64),
                np.array([k["x"] for k in conf]).reshape(-1, 6),
                np.array([k["P"] for k in conf]).reshape(-1, 6, 6))
-    from services.evaluate.main import base_information
+    from common.evaluation.pcrlb import base_information
+    from common.sim.scenario import radar_scene
 
     p = section(cfg, "radar.fusion", FusionParams)
     sc = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
-                       base_information(cfg), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), 30.0)
+                       base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), 30.0)
     ratio = np.array([v.rmse / v.bound for v in sc.values()])
     s = ev.metrics.summary()
     print(f"  confirmed-track GOSPA mean {s.mean_gospa:.0f} m, switches {s.switches}, breaks "

@@ -1,7 +1,9 @@
 """Module 61 of 001 (management) and the cycle of step 24, "fusion posterior".
 
-`GlobalFusion.push(msg, stale)` takes one decoded `radar/etracks/<base>` message and
-returns the `radar/gtracks` messages of the cycles it completed. A cycle at time t runs
+`GlobalFusion.push(base, tracks, stale)` takes the elementary tracks of one base and
+scan (typed arrays: common.radar.elementary.ElementaryTracks) and returns the global
+tracks of the cycles it completed (common.radar.global_report.GlobalTracks); the wire
+messages are parsed and built once, at the service (common.wire.radar_messages). A cycle at time t runs
 when every base that is not `stale` has reported t or a later time; stale bases (the
 caller's judgement, e.g. silent for some seconds of wall time: the service decides, the
 core has no clock) are treated as not reporting in that cycle (their memberships are
@@ -65,21 +67,20 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
-
 import numpy as np
 
 from common.core import imm
 from common.radar.bistatic import POS, BaseGeometry
 from common.core.crossing import CrossingManager, CrossingParams
 from common.radar.decorrelation import Decorrelator
-from common.radar.elementary import ElementaryParams
+from common.radar.elementary import ElementaryParams, ElementaryTracks
 from common.core.gating import chi2_gate
-from common.radar.global_assoc import (YR, ETrackSet, component_gamma, gated_component_pairs,
-                                 gated_pairs, resolve)
+from common.radar.global_assoc import (ETrackSet, component_gamma, gated_component_pairs,
+                                       gated_pairs, resolve)
 from common.radar.global_filter import MixtureFilter
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
-from common.core.track_table import STATUS_NAME, Status, TrackTable
+from common.radar.global_report import GlobalTracks, etrack_set
+from common.core.track_table import Status, TrackTable
 
 PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
 
@@ -134,33 +135,6 @@ class FusionParams(InitParams):
     eq_gate_prob: float = 0.99999
 
 
-def etrack_set(msgs: dict[int, dict[str, Any]], decorrelator: Decorrelator, t: float
-               ) -> ETrackSet:
-    """Stack the decoded etracks messages of one cycle (keyed by base index) and their
-    equivalent measurements at t."""
-    tr = [(b, e) for b, m in msgs.items() for e in m["tracks"]]
-    n = len(tr)
-    x = np.array([e["x"] for _, e in tr], dtype=float).reshape(n, 5)
-    P = np.array([e["P"] for _, e in tr], dtype=float).reshape(n, 5, 5)
-    base = np.array([b for b, _ in tr], dtype=np.intp)
-    ids = np.array([e["id"] for _, e in tr], dtype=np.int64)
-    updated = np.array([e["updated"] for _, e in tr], dtype=bool)
-    ambiguous = np.array([e["ambiguous"] for _, e in tr], dtype=bool)
-    z, Rz, meas = np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros(n, dtype=bool)
-    for b in msgs:
-        k = np.flatnonzero(base == b)
-        eq = decorrelator.step(b, t, ids[k], x[k], P[k], updated[k], ambiguous[k])
-        z[k], Rz[k], meas[k] = eq.z, eq.R, eq.ok
-    y, R = x[:, YR], P[:, YR][:, :, YR]
-    z[~meas], Rz[~meas] = y[~meas], R[~meas]  # finite placeholders, masked by meas
-    return ETrackSet(
-        base=base, id=ids, y=y, R=R,
-        score=np.array([e["score"] for _, e in tr], dtype=float),
-        confirmed=np.array([e["status"] == "confirmed" for _, e in tr], dtype=bool),
-        updated=updated, ambiguous=ambiguous, z=z, Rz=Rz, meas=meas,
-    )
-
-
 class GlobalFusion:
     """Global Cartesian tracks from the elementary tracks of all bases (001 step 24)."""
 
@@ -192,7 +166,7 @@ class GlobalFusion:
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.az_gate = np.radians(self.p.az_gate_deg)
-        self.pending: dict[float, dict[int, dict[str, Any]]] = {}
+        self.pending: dict[float, dict[int, ElementaryTracks]] = {}
         self.t_last: float | None = None
 
     def is_late(self, t: float) -> bool:
@@ -203,11 +177,11 @@ class GlobalFusion:
         """True if `base` already has a message of time t waiting for its cycle."""
         return self.index[base] in self.pending.get(t, {})
 
-    def push(self, msg: dict[str, Any], stale: frozenset[str] = frozenset()
-             ) -> list[dict[str, Any]]:
-        """Buffer one etracks message (known base, not late); run the cycles completed
+    def push(self, base: str, tracks: ElementaryTracks, stale: frozenset[str] = frozenset()
+             ) -> list[GlobalTracks]:
+        """Buffer the report of one base (known, not late); run the cycles completed
         by the bases not in `stale` (base ids), oldest first."""
-        self.pending.setdefault(msg["t"], {})[self.index[msg["base"]]] = msg
+        self.pending.setdefault(tracks.t, {})[self.index[base]] = tracks
         need = {self.index[b] for b in self.base_ids if b not in stale}
         out = []
         while self.pending:
@@ -218,8 +192,8 @@ class GlobalFusion:
             out.append(self.cycle(t0, self.pending.pop(t0)))
         return out
 
-    def cycle(self, t: float, msgs: dict[int, dict[str, Any]]) -> dict[str, Any]:
-        """One fusion cycle at time t with the messages of the bases that reported
+    def cycle(self, t: float, msgs: dict[int, ElementaryTracks]) -> GlobalTracks:
+        """One fusion cycle at time t with the reports of the bases that reported
         (processed in configured base order, whatever the arrival order)."""
         msgs = dict(sorted(msgs.items()))
         E = etrack_set(msgs, self.decorrelator, t)
@@ -371,8 +345,8 @@ class GlobalFusion:
                                     np.where(tab.confirmed[live], Status.CONFIRMED,
                                              Status.TENTATIVE))
 
-    def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> dict[str, Any]:
-        """Module 61: scores, deletion, recycling; the gtracks message of the cycle."""
+    def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> GlobalTracks:
+        """Module 61: scores, deletion, recycling; the global tracks of the cycle."""
         tab = self.table
         live = tab.active_indices()
         r = row[live]
@@ -383,15 +357,7 @@ class GlobalFusion:
             self.crossing.forget(tab.id[dead])
             tab.remove(dead)
         self.t_last = t
-        tracks = []
-        for s in tab.active_indices():
-            tracks.append({
-                "id": int(tab.id[s]), "status": STATUS_NAME[Status(tab.status[s])],
-                "x": tab.x[s].tolist(), "P": tab.P[s].ravel().tolist(),
-                "score": float(tab.score[s]),
-                "etracks": [[self.base_ids[b], int(tab.member[s, b])]
-                            for b in np.flatnonzero(tab.has[s])],
-                "ambiguous": bool(tab.ambiguous[s]),
-            })
-        return {"v": 1, "t": float(t), "tracks": tracks}
-
+        s = tab.active_indices()
+        return GlobalTracks(float(t), tuple(self.base_ids), tab.id[s].copy(), tab.status[s].copy(),
+                            tab.x[s].copy(), tab.P[s].copy(), tab.score[s].copy(),
+                            tab.member[s].copy(), tab.has[s].copy(), tab.ambiguous[s].copy())

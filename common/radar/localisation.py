@@ -225,8 +225,11 @@ def _slr(
     (N, 2K), slope A (N, 2K, 3) and linearisation error covariance Omega (N, 2K, 2K),
     from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0) of the function h(X)
     evaluated with z kept >= z_min (a function of X flat below z_min: the regression is
-    on the points themselves, so that its slope stays that of the data; negative
-    eigenvalues of Omega from the clamp are set to 0)."""
+    on the points themselves, so that its slope stays that of the data). Omega =
+    Cov(Y) - Psi' S^-1 Psi is the Schur complement of the points' joint sample
+    covariance of (X, Y), whose X block is S (> 0): positive semi-definite by construction
+    (clamp or not), so it is only symmetrised (an eigenvalue clip here cost 15 % of a
+    dense.toml fusion cycle and changed nothing above rounding)."""
     lam, V = np.linalg.eigh(S)
     L = V * np.sqrt(3.0 * np.maximum(lam, 0.0))[:, None, :]
     dev = np.concatenate([np.swapaxes(L, 1, 2), -np.swapaxes(L, 1, 2)], axis=1)  # (N, 6, 3)
@@ -241,9 +244,8 @@ def _slr(
     dX = pts - pts.mean(axis=1, keepdims=True)
     Psi = np.swapaxes(dX, 1, 2) @ dY / 6.0  # (N, 3, 2K)
     A = np.swapaxes(_inv_sym(S) @ Psi, 1, 2)
-    Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ S @ np.swapaxes(A, 1, 2)
-    lam_o, V_o = np.linalg.eigh(0.5 * (Omega + np.swapaxes(Omega, 1, 2)))
-    return y_mean, A, (V_o * np.maximum(lam_o, 0.0)[:, None, :]) @ np.swapaxes(V_o, 1, 2)
+    Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ Psi  # A S A' = Psi' S^-1 Psi = A Psi
+    return y_mean, A, 0.5 * (Omega + np.swapaxes(Omega, 1, 2))
 
 
 def _inv_sym(A: np.ndarray) -> np.ndarray:

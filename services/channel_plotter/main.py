@@ -13,7 +13,7 @@ from common.wire import protocol
 from common.cli import add_base_service, load_config
 from common.deploy.config import section
 from common.radar.plot_fusion import PlotFusion, PlotterParams
-from common.wire.radar_chain import fused_message, plots_of
+from common.wire.radar_messages import fused_message, plots_of
 from common.bus.service import Service
 from common.core.rejection import Rejected
 

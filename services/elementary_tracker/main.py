@@ -14,7 +14,7 @@ from common.wire import protocol
 from common.cli import add_base_service, load_config
 from common.deploy.config import section
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.wire.radar_chain import etracks_message, plots_of
+from common.wire.radar_messages import etracks_message, plots_of
 from common.bus.service import Service
 from common.core.rejection import Rejected
 

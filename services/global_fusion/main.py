@@ -2,8 +2,8 @@
 (001 step 24, modules 61-65; crossing management of 004).
 
 Subscribes radar/etracks/*, publishes radar/gtracks once per fusion cycle with every
-live global track. The algorithm is common.radar.global_fusion; this module only decodes,
-validates and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
+live global track. The algorithm is common.radar.global_fusion; this module only decodes
+and validates (into typed arrays, common.wire.radar_messages.etracks_of) and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
 [radar.fusion_crossing] (CrossingParams); without that table the global tracks use the
 sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
 in m^3 as `volume`). [radar.tracker] (ElementaryParams) gives the elementary trackers'
@@ -31,12 +31,13 @@ from __future__ import annotations
 import argparse
 import time
 
-from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import ConfigError, section
 from common.radar.global_fusion import FusionParams
 from common.wire.radar_chain import global_fusion
-from common.bus.service import Rejected, Service
+from common.wire.radar_messages import etracks_of, gtracks_message
+from common.bus.service import Service
+from common.core.rejection import Rejected
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -55,32 +56,33 @@ def main(args: argparse.Namespace) -> int:
     ahead: set[str] = set()  # bases whose latest message was clock_ahead
 
     def on_etracks(key: str, payload: bytes) -> None:
-        msg = protocol.decode("etracks", payload)
-        if msg["base"] not in core.index:
-            raise Rejected("unknown_base", f"base '{msg['base']}' is not configured")
-        if key.rsplit("/", 1)[-1] != msg["base"]:
-            raise Rejected("base_mismatch", f"base '{msg['base']}' published on {key}")
-        if core.is_late(msg["t"]):
-            ahead.discard(msg["base"])  # its clock is back: the next cycle waits for it
-            if msg["t"] >= core.t_last - params.max_wait:  # just behind (docstring)
-                heard[msg["base"]] = time.monotonic()
-            raise Rejected("time_backwards", f"t={msg['t']} after the cycle of t={core.t_last}")
-        if core.is_duplicate(msg["base"], msg["t"]):
-            raise Rejected("duplicate", f"base '{msg['base']}' sent t={msg['t']} twice")
+        base, tracks = etracks_of(payload)
+        t = tracks.t
+        if base not in core.index:
+            raise Rejected("unknown_base", f"base '{base}' is not configured")
+        if key.rsplit("/", 1)[-1] != base:
+            raise Rejected("base_mismatch", f"base '{base}' published on {key}")
+        if core.is_late(t):
+            ahead.discard(base)  # its clock is back: the next cycle waits for it
+            if t >= core.t_last - params.max_wait:  # just behind (docstring)
+                heard[base] = time.monotonic()
+            raise Rejected("time_backwards", f"t={t} after the cycle of t={core.t_last}")
+        if core.is_duplicate(base, t):
+            raise Rejected("duplicate", f"base '{base}' sent t={t} twice")
         now = time.monotonic()
         for b in core.base_ids:  # a base never heard of is silent since the first message
             heard.setdefault(b, now)
-        heard[msg["base"]] = now
-        if core.t_last is not None and msg["t"] > core.t_last + params.max_lead:
-            ahead.add(msg["base"])
-            raise Rejected("clock_ahead", f"base '{msg['base']}' t={msg['t']} is more than "
+        heard[base] = now
+        if core.t_last is not None and t > core.t_last + params.max_lead:
+            ahead.add(base)
+            raise Rejected("clock_ahead", f"base '{base}' t={t} is more than "
                                           f"max_lead={params.max_lead} s after the cycle of "
                                           f"t={core.t_last}: not fused, base stale")
-        ahead.discard(msg["base"])
-        stale = frozenset(b for b, t in heard.items() if now - t > params.max_wait) | ahead
-        for out in core.push(msg, stale):
-            svc.last_t = out["t"]
-            svc.publish("radar/gtracks", out)
+        ahead.discard(base)
+        stale = frozenset(b for b, h in heard.items() if now - h > params.max_wait) | ahead
+        for out in core.push(base, tracks, stale):
+            svc.last_t = out.t
+            svc.publish("radar/gtracks", gtracks_message(out))
 
     svc.subscribe("radar/etracks/*", on_etracks)
     return svc.run()

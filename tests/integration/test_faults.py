@@ -22,6 +22,7 @@ from common.deploy.config import ZenohConfig, load
 from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
+from common.wire.radar_messages import etracks_from
 from tests.harness import ROOT, SCENARIOS, Deployment
 from tests.radar.test_global_ekf import BASES, TX, RX, _Synth
 from tests.integration.test_run import TWO_TARGETS, Collector, Run
@@ -139,8 +140,8 @@ def test_unit_a_duplicate_is_known_until_its_cycle_runs() -> None:
     gf = GlobalFusion(BASES, FusionParams())
     m1, m2, m3 = syn.messages(0.0)
     assert not gf.is_duplicate("b1", 0.0)
-    assert gf.push(m1) == [] and gf.is_duplicate("b1", 0.0) and not gf.is_duplicate("b2", 0.0)
-    assert [o["t"] for o in gf.push(m2) + gf.push(m3)] == [0.0]
+    assert gf.push(*etracks_from(m1)) == [] and gf.is_duplicate("b1", 0.0) and not gf.is_duplicate("b2", 0.0)
+    assert [o.t for o in gf.push(*etracks_from(m2)) + gf.push(*etracks_from(m3))] == [0.0]
     assert not gf.is_duplicate("b1", 0.0) and gf.is_late(0.0)  # once run: late
 
 

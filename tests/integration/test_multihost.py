@@ -49,7 +49,8 @@ from common.radar.bistatic import POS
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
 from common.bus.transport import Publisher
-from common.wire.radar_chain import RadarChain, etracks_message, plots_of
+from common.wire.radar_chain import RadarChain
+from common.wire.radar_messages import etracks_message, plots_of
 from tests.harness import REPO, SCENARIOS, Deployment
 from tests.netns import HUB_ADDRESS, NsProcess, Topology, unavailable
 

@@ -14,6 +14,7 @@ from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCr
 from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.radar.plot_fusion import Plots
 from common.core.track_table import STATUS_NAME, Status
+from common.wire.radar_messages import etracks_from, gtracks_message
 
 
 RX = np.array([0.0, 0.0, 30.0])
@@ -99,6 +100,11 @@ class _Synth:
         return out
 
 
+def push(gf: GlobalFusion, msg: dict, stale: frozenset[str] = frozenset()) -> list[dict]:
+    """The gtracks messages of the cycles completed by one etracks message."""
+    return [gtracks_message(o) for o in gf.push(*etracks_from(msg), stale)]
+
+
 def test_fusion_on_synthetic_elementary_tracks() -> None:
     syn = _Synth(np.random.default_rng(4))
     gf = GlobalFusion(BASES, FusionParams())
@@ -106,7 +112,7 @@ def test_fusion_on_synthetic_elementary_tracks() -> None:
     nees, err = [], []
     for k in range(60):
         msgs = syn.messages(float(k))
-        outs = [o for m in msgs for o in gf.push(m)]
+        outs = [o for m in msgs for o in push(gf, m)]
         assert [o["t"] for o in outs] == [float(k)]  # the third base completes the cycle
         tracks = outs[0]["tracks"]
         if k < 2:  # elementary tracks open at k = 1 and are confirmed at k = 2
@@ -134,12 +140,12 @@ def test_pure_prediction_deletion_and_recycling() -> None:
     syn = _Synth(np.random.default_rng(8))
     gf = GlobalFusion(BASES, FusionParams(max_coast=3))
     for k in range(8):
-        out = [o for m in syn.messages(float(k)) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k)) for o in push(gf, m)][0]
     ids = sorted(tr["id"] for tr in out["tracks"])
     assert ids == [1, 2]
     lost = None
     for k in range(8, 14):  # target index 0 is no longer reported by any base
-        out = [o for m in syn.messages(float(k), drop={0}) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k), drop={0}) for o in push(gf, m)][0]
         if lost is None:
             lost = {tr["id"] for tr in out["tracks"] if not tr["etracks"]}
             assert len(lost) == 1
@@ -147,7 +153,7 @@ def test_pure_prediction_deletion_and_recycling() -> None:
             assert gone["score"] == 0.0 and gone["status"] == "coasting"
     assert len(out["tracks"]) == 1  # deleted after max_coast cycles without contributors
     for k in range(14, 18):  # the target comes back: a new track takes the freed number
-        out = [o for m in syn.messages(float(k)) for o in gf.push(m)][0]
+        out = [o for m in syn.messages(float(k)) for o in push(gf, m)][0]
     assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
 
 
@@ -155,18 +161,18 @@ def test_cycle_waits_for_every_base_unless_stale() -> None:
     syn = _Synth(np.random.default_rng(9))
     gf = GlobalFusion(BASES, FusionParams())
     m0, m1, m2 = syn.messages(0.0), syn.messages(1.0), syn.messages(2.0)
-    assert gf.push(m0[0]) == [] and gf.push(m0[1]) == []
-    assert gf.push(m1[0]) == [] and gf.push(m2[0]) == []  # b1 runs ahead: wait for b3
-    out = gf.push(m1[1], stale=frozenset({"b3"}))  # b3 silent: cycles 0, 1 run without it
+    assert push(gf, m0[0]) == [] and push(gf, m0[1]) == []
+    assert push(gf, m1[0]) == [] and push(gf, m2[0]) == []  # b1 runs ahead: wait for b3
+    out = push(gf, m1[1], frozenset({"b3"}))  # b3 silent: cycles 0, 1 run without it
     assert [o["t"] for o in out] == [0.0, 1.0]
     assert gf.is_late(1.0) and not gf.is_late(2.0)
-    assert gf.push(m2[1]) == []  # b3 no longer stale: cycle 2 waits for it
-    assert [o["t"] for o in gf.push(m2[2])] == [2.0]
+    assert push(gf, m2[1]) == []  # b3 no longer stale: cycle 2 waits for it
+    assert [o["t"] for o in push(gf, m2[2])] == [2.0]
 
 
 def _outputs(batches: list[list[dict]]) -> list[dict]:
     gf = GlobalFusion(BASES, FusionParams())
-    return [o for msgs in batches for m in msgs for o in gf.push(m)]
+    return [o for msgs in batches for m in msgs for o in push(gf, m)]
 
 
 def test_output_independent_of_arrival_order() -> None:

@@ -17,7 +17,8 @@ from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCr
 from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.radar.global_init import InitParams, altitude_bands
 from common.radar.plot_fusion import Plots
-from common.wire.radar_chain import RadarChain, etracks_message
+from common.wire.radar_chain import RadarChain
+from common.wire.radar_messages import gtracks_message
 from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario
 
@@ -133,8 +134,8 @@ def test_four_bases_one_global_track_per_target() -> None:
             y = project(sk, b.tx, b.rx) + rng.standard_normal((n, 3)) * sig
             tracks = trk[b.id].step(float(k), Plots(y[:, 0], y[:, 1], y[:, 2] % (2 * np.pi),
                                                     *np.tile(sig, (n, 1)).T, np.full(n, 3)))
-            for o in gf.push(etracks_message(b.id, tracks)):
-                out = o
+            for o in gf.push(b.id, tracks):
+                out = gtracks_message(o)
     assert out is not None and len(out["tracks"]) == n
     assert all(len(t["etracks"]) == 4 for t in out["tracks"])
 

@@ -1,0 +1,95 @@
+"""common.wire.radar_messages: the typed etracks parser accepts exactly what
+protocol.decode accepts, rejects with the same field, and round-trips the builders."""
+
+from __future__ import annotations
+
+import copy
+
+import msgpack
+import numpy as np
+import pytest
+
+from common.core.track_table import Status
+from common.radar.elementary import ElementaryTracks
+from common.radar.global_report import GlobalTracks
+from common.wire import protocol
+from common.wire.radar_messages import etracks_from, etracks_message, etracks_of, gtracks_message
+
+
+def _tracks(n: int, rng: np.random.Generator) -> ElementaryTracks:
+    P = rng.standard_normal((n, 5, 5))
+    return ElementaryTracks(
+        t=12.0, id=np.arange(1, n + 1), status=rng.integers(0, 3, n), x=rng.standard_normal((n, 5)),
+        P=P @ np.swapaxes(P, 1, 2), score=rng.standard_normal(n), n_ch=rng.integers(0, 4, n),
+        updated=rng.uniform(size=n) < 0.5, ambiguous=rng.uniform(size=n) < 0.5)
+
+
+def _same(a: ElementaryTracks, b: ElementaryTracks) -> None:
+    assert a.t == b.t
+    for f in ("id", "status", "x", "P", "score", "n_ch", "updated", "ambiguous"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+        assert getattr(a, f).dtype == getattr(b, f).dtype
+
+
+def test_round_trip_equals_protocol_decode() -> None:
+    tr = _tracks(7, np.random.default_rng(1))
+    payload = protocol.encode(etracks_message("b2", tr))
+    base, fast = etracks_of(payload)
+    ref_base, ref = etracks_from(protocol.decode("etracks", payload))
+    assert base == ref_base == "b2"
+    _same(fast, ref)
+    _same(fast, tr)
+    assert len(etracks_of(protocol.encode(etracks_message("b1", _tracks(0, np.random.default_rng(2)))))[1]) == 0
+
+
+BAD = [
+    ("v", True), ("v", 2), ("t", -1.0), ("t", float("nan")), ("t", "3"), ("base", ""), ("base", 3),
+    ("tracks", {}), ("tracks", [1]), ("tracks.0.id", -1), ("tracks.0.id", 1.5), ("tracks.0.id", True),
+    ("tracks.0.id", 2**63), ("tracks.0.status", "deleted"), ("tracks.0.status", ["confirmed"]),
+    ("tracks.0.x", [1.0] * 4), ("tracks.0.x", [1.0, 2.0, True, 4.0, 5.0]),
+    ("tracks.0.x", [1.0, 2.0, float("inf"), 4.0, 5.0]), ("tracks.0.P", [0.0] * 24),
+    ("tracks.0.P", ["a"] * 25), ("tracks.0.score", None), ("tracks.0.n_ch", -2),
+    ("tracks.0.updated", 1), ("tracks.0.ambiguous", "yes"),
+]
+
+
+@pytest.mark.parametrize("path,value", BAD)
+def test_rejects_what_protocol_rejects_with_the_same_field(path: str, value: object) -> None:
+    msg = protocol.unpack(protocol.encode(etracks_message("b1", _tracks(3, np.random.default_rng(3)))))
+    bad = copy.deepcopy(msg)
+    *head, last = path.split(".")
+    node = bad
+    for k in head:
+        node = node[int(k)] if k.isdigit() else node[k]
+    node[last] = value
+    payload = msgpack.packb(bad, use_bin_type=True)
+    with pytest.raises(protocol.DecodeError) as ref:
+        protocol.decode("etracks", payload)
+    with pytest.raises(protocol.DecodeError) as got:
+        etracks_of(payload)
+    assert got.value.field == ref.value.field
+
+
+@pytest.mark.parametrize("missing", ["t", "base", "tracks", "tracks.1.P", "tracks.2.updated"])
+def test_missing_field(missing: str) -> None:
+    msg = protocol.unpack(protocol.encode(etracks_message("b1", _tracks(3, np.random.default_rng(4)))))
+    *head, last = missing.split(".")
+    node = msg
+    for k in head:
+        node = node[int(k)] if k.isdigit() else node[k]
+    del node[last]
+    with pytest.raises(protocol.DecodeError, match=last):
+        etracks_of(msgpack.packb(msg, use_bin_type=True))
+
+
+def test_gtracks_message_is_valid_and_names_the_contributing_bases() -> None:
+    g = GlobalTracks(t=5.0, bases=("b1", "b2", "b3"), id=np.array([4, 9]),
+                     status=np.array([Status.CONFIRMED, Status.COASTING]),
+                     x=np.arange(12.0).reshape(2, 6), P=np.tile(np.eye(6), (2, 1, 1)),
+                     score=np.array([3.5, 0.0]), member=np.array([[7, 0, 2], [0, 0, 0]]),
+                     has=np.array([[True, False, True], [False, False, False]]),
+                     ambiguous=np.array([False, True]))
+    msg = protocol.decode("gtracks", protocol.encode(gtracks_message(g)))
+    assert [tr["status"] for tr in msg["tracks"]] == ["confirmed", "coasting"]
+    assert msg["tracks"][0]["etracks"] == [("b1", 7), ("b3", 2)] and msg["tracks"][1]["etracks"] == []
+    np.testing.assert_array_equal(msg["tracks"][1]["x"], np.arange(6.0, 12.0))
