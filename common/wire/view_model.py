@@ -96,7 +96,7 @@ class _Topic:
 class _Track:
     """What the view remembers of a global track between messages."""
 
-    trail: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=TRAIL))
+    trail: deque[list[int]] = field(default_factory=lambda: deque(maxlen=TRAIL))  # [x, y] m
     trail_t: float = -np.inf
     seen: int = 0
 
@@ -149,23 +149,23 @@ class ViewModel:
         for old in set(self._tracks) - set(ids):
             del self._tracks[old]
         out = []
-        if tracks:
-            x = np.array([k["x"] for k in tracks], dtype=float)
+        if tracks:  # rounded once per message: the page draws metres, not millimetres
+            xa = np.array([k["x"] for k in tracks], dtype=float)
             P = np.array([k["P"] for k in tracks], dtype=float).reshape(-1, 6, 6)
-            ell = ellipses(P[:, POS][:, :, POS])
-            sig = np.sqrt(np.maximum(np.diagonal(P, axis1=1, axis2=2), 0.0))
+            x, ell = _round(xa), _round(ellipses(P[:, POS][:, :, POS]), 3)
+            sig = _round(np.sqrt(np.maximum(np.diagonal(P, axis1=1, axis2=2), 0.0)), 2)
+            trail_xy = np.rint(xa[:, POS]).astype(int).tolist()
         for i, k in enumerate(tracks):
             mem = self._tracks.setdefault(ids[i], _Track())
             mem.seen += 1
             if t >= mem.trail_t + TRAIL_DT:
-                mem.trail.append((round(float(x[i, 0]), 1), round(float(x[i, 2]), 1)))
+                mem.trail.append(trail_xy[i])
                 mem.trail_t = t
             out.append({
                 "id": ids[i], "status": k["status"], "amb": bool(k["ambiguous"]),
-                "x": _round(x[i]), "sig": _round(sig[i], 2), "ell": _round(ell[i], 3),
-                "score": round(float(k["score"]), 2),
+                "x": x[i], "sig": sig[i], "ell": ell[i], "score": round(float(k["score"]), 2),
                 "et": [[b, int(e)] for b, e in k["etracks"]],
-                "n": mem.seen, "trail": [list(p) for p in mem.trail],
+                "n": mem.seen, "trail": list(mem.trail),
             })
         self._topic("gtracks").set({"t": t, "tracks": out})
 
