@@ -28,13 +28,20 @@ Deviations (stated):
   `merge_sigma_max_deg`.
 - Order: conflicts are handled before pruning (the seed: after the usual Kalman update),
   so that pruning sees the re-weighted hypotheses.
-- A track split off inherits the status and ZA of its track and shares its register
-  up to the split.
+- A track split off starts tentative (SA = ZA = 0; the seed lets it inherit the status
+  of its track: a confirmed split-off of a clutter hypothesis was a confirmed false
+  track, and a duplicate of the target until the SPRT removed it) and shares the
+  register of its track up to the split.
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
   implemented as track i continuing with omega's hypotheses (its number and register
   are kept; its own hypotheses, which followed the other target, are dropped) and
   omega removed. A conflict also ends when P_u of the pair's main hypotheses falls
   below 1e-3 (the seed ends it by the re-link only).
+- Confirmation evidence: a tentative track whose main hypothesis took the measurement
+  of a confirmed track's main hypothesis does not pass the test this cycle (its LR counts
+  as at most B). Without it a track born on clutter next to a target, fed by the
+  target's detections (which every track may use), confirmed as a duplicate (seen at
+  crossings: a third confirmed track between the two).
 - Track numbers are never reused (the register of a number stays unambiguous).
 - Resolution conflicts need the broadband model (as in the seed); narrowband tracks run
   without them, and without multi-line grouping.
@@ -107,7 +114,7 @@ class MhtParams:
     c_krit: float = 1e-3
     d_merge_hyp: float = 2.0
     d_split: float = 5.0
-    d_merge: float = 2.0
+    d_merge: float = 3.0
     A: float = 0.5
     B: float = 2.0
     za_krit: int = 3
@@ -237,7 +244,12 @@ class MhtTracker:
 
         LR = track_sums(self.hc, self.ht, tr.size)  # 000 LR_i = sum_h c_ih
         was = tr.SA.copy()
-        tr.ZA, tr.SA, norm = sprt(LR, tr.ZA, tr.SA, mp.A, mp.B, mp.za_krit, mp.za_max)
+        main = heaviest(self.hc, self.ht, tr.size)
+        mmeas = np.where(main >= 0, self.hmeas[np.maximum(main, 0)], -1)
+        claimed = mmeas[(tr.SA == 1) & (mmeas >= 0)]
+        dup = (tr.SA == 0) & (mmeas >= 0) & np.isin(mmeas, claimed)
+        tr.ZA, tr.SA, norm = sprt(np.where(dup, np.minimum(LR, mp.B), LR), tr.ZA, tr.SA,
+                                  mp.A, mp.B, mp.za_krit, mp.za_max)
         self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
         tr.no_b = np.where(norm, 0, tr.no_b + 1)
         self._conflict_flags()

@@ -67,11 +67,9 @@ class TrackArrays:
         return np.arange(start, start + k)
 
     def split(self, src: np.ndarray, cycle: int) -> np.ndarray:
-        """New tracks split off tracks `src`: same SA and ZA (000 split); their slots."""
-        slots = self.add(src.size, cycle)
-        self.SA[slots], self.ZA[slots] = self.SA[src], self.ZA[src]
-        self.ever_confirmed[slots] = self.SA[src] == 1
-        return slots
+        """New tentative tracks split off tracks `src` (000 split; the status is not
+        inherited, see common.sonar.mht); their slots."""
+        return self.add(src.size, cycle)
 
     def keep(self, mask: np.ndarray) -> None:
         """Keep the tracks of `mask` (slot order preserved)."""
