@@ -1,0 +1,152 @@
+"""The 000 multiple-hypothesis bearing tracker cycle (common.sonar.mht): initialisation,
+SPRT confirmation, clutter, caps, track merge, deletion, crossing conflicts, the
+retrodicted register and the [sonar.tracker] mode switch."""
+
+import math
+
+import numpy as np
+import pytest
+
+from common.deploy.config import ConfigError, parse, section
+from common.sonar.bearing_tracker import TrackerParams
+from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams
+
+DEG = math.radians(1.0)
+P = TrackerParams(mode="broadband", q_theta=1e-11, init_brg_rate_sigma=6e-4)
+
+
+def tracker(**kw) -> MhtTracker:
+    return MhtTracker(P, MhtParams(**kw), "cylindrical", DEG)
+
+
+def scene(brg0, rate, n, seed, clutter=0.0, pd=1.0, level=13.0):
+    """Per cycle (t, brg, amp, true bearings): targets on straight bearing lines, 1 deg
+    noise, level +- 2 dB, Poisson clutter uniform in bearing at 3 dB + Exp(2 dB)."""
+    rng = np.random.default_rng(seed)
+    brg0, rate = np.asarray(brg0, float), np.asarray(rate, float)
+    out = []
+    for k in range(n):
+        t = 10.0 * k
+        truth = brg0 + rate * t
+        det = rng.random(truth.size) < pd
+        b = truth[det] + DEG * rng.standard_normal(det.sum())
+        lv = level + 2.0 * rng.standard_normal(det.sum())
+        nc = rng.poisson(clutter)
+        b = np.r_[b, rng.uniform(0, 2 * math.pi, nc)]
+        lv = np.r_[lv, 3.0 + rng.exponential(2.0, nc)]
+        out.append((t, np.mod(b, 2 * math.pi), 10.0 ** (lv / 10.0), truth))
+    return out
+
+
+def test_initialisation_one_tentative_track_per_measurement():
+    trk = tracker()
+    c = trk.step(0.0, np.array([0.5, 1.5]), np.array([10.0, 100.0]), 0.0)
+    assert c.ids.tolist() == [1, 2] and not c.confirmed.any()
+    np.testing.assert_allclose(c.x, [[0.5, 0, 10.0, 0], [1.5, 0, 20.0, 0]])  # 000 x = H' z
+    assert trk.hc.tolist() == [1.0, 1.0] and trk.tr.ZA.tolist() == [0, 0]
+    assert (trk.tr.IN == -1).all()
+    np.testing.assert_allclose(np.diag(c.P[0]), [DEG**2, 6e-4**2, 9.0, 0.05**2])  # P0
+
+
+def test_a_target_confirms_after_za_krit_passes_and_keeps_its_number():
+    trk = tracker()
+    first = None
+    for k, (t, b, a, truth) in enumerate(scene([1.0], [2e-4], 40, seed=1)):
+        c = trk.step(t, b, a, 0.0)
+        if c.confirmed.any() and first is None:
+            first = k
+            ident = int(c.ids[c.confirmed][0])
+    # cycle 0 opens the track (ZA = 0); ZA 1, 2, 3, 4 at cycles 1-4; 4 > ZA_krit = 3
+    assert first == 4
+    assert c.ids[c.confirmed].tolist() == [ident]
+    assert abs(c.x[c.confirmed][0, 0] - truth[0]) < 2 * DEG
+
+
+def test_clutter_alone_confirms_no_track():
+    trk = tracker(rho_f=3.0 / (2 * math.pi * 10.0))
+    confirmed = set()
+    for t, b, a, _ in scene([], [], 300, seed=2, clutter=3.0):
+        c = trk.step(t, b, a, 0.0)
+        confirmed |= set(c.ids[c.confirmed].tolist())
+    assert confirmed == set()
+    assert trk.tr.size < 15  # tentative clutter tracks are deleted (n_delete)
+
+
+def test_hypothesis_caps_bound_the_cost():
+    trk = tracker(max_hyp_track=2, d_merge_hyp=0.1, rho_f=0.5)
+    for t, b, a, _ in scene([1.0, 1.02], [0.0, 0.0], 30, seed=3, clutter=10.0):
+        trk.step(t, b, a, 0.0)
+        assert np.bincount(trk.ht).max() <= 2
+    assert trk.n_hyp_max == 2
+
+
+def test_a_tentative_duplicate_of_a_confirmed_track_is_merged_away():
+    trk = tracker()
+    for t, b, a, _ in scene([1.0], [0.0], 8, seed=4):
+        c = trk.step(t, b, a, 0.0)
+    assert c.confirmed.tolist() == [True]
+    trk._open(np.array([[c.x[0, 0] + 0.2 * DEG, c.x[0, 2]]]), np.array([[DEG**2, 9.0]]))
+    drop = trk._merge_tracks()  # 000 track merge: the newer of the pair goes
+    assert drop.tolist() == [False, True]
+
+
+def test_a_lost_target_is_deleted_and_its_register_stays_queryable():
+    trk = tracker()
+    cyc = scene([1.0], [0.0], 10, seed=5)
+    for t, b, a, _ in cyc:
+        c = trk.step(t, b, a, 0.0)
+    ident = int(c.ids[c.confirmed][0])
+    for k in range(10, 40):
+        c = trk.step(10.0 * k, np.zeros(0), np.zeros(0), 0.0)
+        if c.ids.size == 0:
+            break
+    assert c.ids.size == 0
+    status, h = trk.history_of(ident)
+    assert status == "deleted" and h["t"][0] == 0.0
+
+
+def test_crossing_targets_keep_their_numbers_and_flag_the_conflict():
+    trk = tracker(rho_f=1.0 / (2 * math.pi * 10.0))
+    rate = 0.5 * DEG / 60.0
+    cyc = scene([85 * DEG, 95 * DEG], [rate, -rate], 120, seed=6, clutter=1.0, pd=0.9)
+    owner, flagged = {}, False
+    for t, b, a, truth in cyc:
+        c = trk.step(t, b, a, 0.0)
+        flagged |= bool(c.ambiguous[c.confirmed].any())
+        for j in range(2):
+            if abs(truth[0] - truth[1]) > 6 * DEG and c.confirmed.any():
+                d = np.abs(np.angle(np.exp(1j * (c.x[c.confirmed, 0] - truth[j]))))
+                if d.min() < 5 * DEG:
+                    owner.setdefault(j, set()).add(int(c.ids[c.confirmed][np.argmin(d)]))
+    assert len(owner[0]) == 1 and len(owner[1]) == 1 and owner[0] != owner[1]
+    assert flagged  # resolution conflict (000 IN) published as the ambiguous flag
+
+
+def test_register_is_retrodicted_and_beats_the_filtered_bearings():
+    trk = tracker()
+    cyc = scene([1.0], [1e-4], 60, seed=7)
+    filt = []
+    for t, b, a, truth in cyc:
+        c = trk.step(t, b, a, 0.0)
+        filt.append(c.x[0, 0] if c.ids.size else np.nan)
+    ident = int(c.ids[c.confirmed][0])
+    status, h = trk.history_of(ident)
+    assert status == "confirmed" and h["t"].size == 60
+    truth = np.array([x[3][0] for x in cyc])
+    n = 60 - trk.mp.n_retro
+    e_retro = np.sqrt(np.mean((h["brg"][5:n] - truth[5:n]) ** 2))
+    e_filt = np.sqrt(np.mean((np.array(filt)[5:n] - truth[5:n]) ** 2))
+    assert e_retro < 0.8 * e_filt, (e_retro, e_filt)
+    assert trk.history_of(10_000) is None
+
+
+def test_mode_switch_in_the_deployment_file():
+    doc = {"sonar": {"array": [{"id": "a1", "kind": "cylindrical", "sigma0": 0.02}],
+                     "tracker": {"mode_association": "mht", "mht": {"rho_f": 0.1, "n_retro": 5}}}}
+    cfg = parse(doc)
+    assert section(cfg, "sonar.tracker", SonarTrackerParams).mode_association == "mht"
+    assert section(cfg, "sonar.tracker.mht", MhtParams) == MhtParams(rho_f=0.1, n_retro=5)
+    assert section(parse({}), "sonar.tracker", SonarTrackerParams).mode_association == "gnn"
+    doc["sonar"]["tracker"]["mode_association"] = "jpda"
+    with pytest.raises(ConfigError, match="mode_association"):
+        section(parse(doc), "sonar.tracker", SonarTrackerParams)
