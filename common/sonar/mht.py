@@ -38,10 +38,11 @@ Deviations (stated):
   omega removed. A conflict also ends when P_u of the pair's main hypotheses falls
   below 1e-3 (the seed ends it by the re-link only).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
-  of a confirmed track's main hypothesis does not pass the test this cycle (its LR counts
-  as at most B). Without it a track born on clutter next to a target, fed by the
-  target's detections (which every track may use), confirmed as a duplicate (seen at
-  crossings: a third confirmed track between the two).
+  of the main hypothesis of a confirmed or an older track does not pass the test this
+  cycle (its LR counts as at most B). Without it a track born on clutter next to a
+  target, fed by the target's detections (which every track may use), confirmed as a
+  duplicate (seen at crossings: a third confirmed track between the two), and two
+  tentative tracks on one target confirmed together.
 - Track numbers are never reused (the register of a number stays unambiguous).
 - Resolution conflicts need the broadband model (as in the seed); narrowband tracks run
   without them, and without multi-line grouping.
@@ -246,8 +247,7 @@ class MhtTracker:
         was = tr.SA.copy()
         main = heaviest(self.hc, self.ht, tr.size)
         mmeas = np.where(main >= 0, self.hmeas[np.maximum(main, 0)], -1)
-        claimed = mmeas[(tr.SA == 1) & (mmeas >= 0)]
-        dup = (tr.SA == 0) & (mmeas >= 0) & np.isin(mmeas, claimed)
+        dup = self._duplicates(mmeas, z.shape[0])
         tr.ZA, tr.SA, norm = sprt(np.where(dup, np.minimum(LR, mp.B), LR), tr.ZA, tr.SA,
                                   mp.A, mp.B, mp.za_krit, mp.za_max)
         self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
@@ -359,6 +359,20 @@ class MhtTracker:
         newer = np.where(tr.uid[a] > tr.uid[b], a, b)
         drop[newer] = True
         return drop
+
+    def _duplicates(self, mmeas: np.ndarray, M: int) -> np.ndarray:
+        """Tentative tracks whose main hypothesis took the measurement of a confirmed
+        track's or an older track's main hypothesis (they do not pass the SPRT)."""
+        tr = self.tr
+        has = mmeas >= 0
+        if M == 0:
+            return has
+        by_conf = np.zeros(M, dtype=bool)
+        by_conf[mmeas[has & (tr.SA == 1)]] = True
+        oldest = np.full(M, np.iinfo(np.int64).max)
+        np.minimum.at(oldest, mmeas[has], tr.uid[has])
+        safe = np.maximum(mmeas, 0)
+        return (tr.SA == 0) & has & (by_conf[safe] | (oldest[safe] < tr.uid))
 
     def _conflict_flags(self) -> None:
         """000 conflict detection: confirmed tracks whose main hypotheses processed the
