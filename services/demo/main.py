@@ -9,6 +9,7 @@ nothing published was lost, and scores the tracks against the simulator's truth.
 from __future__ import annotations
 
 import argparse
+import socket
 import sys
 import time
 import tomllib
@@ -17,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from common.wire import protocol
-from common.bus.transport import Inbox, open_session
+from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, add_common
 from common.deploy.config import ZenohConfig, load
 from common.deploy.deployment import ChildSpec, plan
@@ -29,6 +30,8 @@ from common.wire.protocol import kind_of
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BAR = 30
 QUIET_S = 2.0
+VIEW_PORT = 8080
+VIEW_SPEED = {"radar": 2.0, "sonar": 60.0}  # ~1 min each, slow enough to watch
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,6 +40,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sonar", default=str(SCENARIOS / "sonar_tma.toml"))
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--out", default="out", help="folder for logs and pictures")
+    p.add_argument("--view", action="store_true",
+                   help=f"serve the live view (pfusion view) on port {VIEW_PORT} (or a free one) "
+                        "while the demo runs; the simulators then run at "
+                        + ", ".join(f"{k} {v:g}x" for k, v in VIEW_SPEED.items()) + " real time")
 
 
 class Collector:
@@ -115,13 +122,17 @@ def main(args: argparse.Namespace) -> int:
             children += [Child(s.name, *s.argv, log=out / f"{s.name.replace('/', '-')}.log")
                          for s in specs]
             waits = ["demo/collector", *[s.alive for s in specs]]
-            for scenario in (args.radar, args.sonar):
+            if args.view:
+                children.append(start_view(args.radar, endpoint, out))
+            for name, scenario in (("radar", args.radar), ("sonar", args.sonar)):
                 argv = ["simulate", "--config", scenario, "--scenario", scenario,
                         "--connect", endpoint, "--seed", str(args.seed), "--wait-timeout", "120"]
+                if args.view:
+                    argv += ["--speed", str(VIEW_SPEED[name])]
                 for w in waits:
                     argv += ["--wait-alive", w]
                 children.append(Child("simulate", *argv, log=out / f"simulate-{Path(scenario).stem}.log"))
-            sims = children[len(specs):]
+            sims = children[-2:]
             while any(s.alive() for s in sims) or len(col.published) < len(sims):
                 col.drain()
                 if sys.stderr.isatty():
@@ -142,7 +153,22 @@ def main(args: argparse.Namespace) -> int:
     wall = time.monotonic() - t0
     data = Collected(radar_cfg, sonar_cfg, col.by_kind)
     return report(col, data, wall, [s.name for s in specs], out,
-                  [c.proc.returncode for c in children[len(specs):]])
+                  [c.proc.returncode for c in children[-2:]])
+
+
+def start_view(config: str, endpoint: str, out: Path) -> Child:
+    """``pfusion view`` on VIEW_PORT (a free port if it is taken); prints its address."""
+    port = VIEW_PORT
+    try:
+        socket.create_server(("127.0.0.1", port)).close()
+    except OSError:
+        port = free_port()
+    view = Child("view", "view", "--config", config, "--connect", endpoint, "--port", str(port),
+                 log=out / "view.log")
+    wait_port(port, 60)
+    print(f"live view: http://127.0.0.1:{port}/ (open it now: it is served while the demo runs)",
+          flush=True)
+    return view
 
 
 def report(col: Collector, data: Collected, wall: float, services: list[str],

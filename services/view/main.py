@@ -102,19 +102,20 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
     hub = Hub(model)
-    runner = web.AppRunner(app(hub), access_log=None)
+    feed = Feed(session, hub, root, loop)  # subscribed before the page can be reached
+    runner = web.AppRunner(app(hub), access_log=None, shutdown_timeout=2.0)
     await runner.setup()
     site = web.TCPSite(runner, args.host, args.port)
     try:
         await site.start()
     except OSError as e:
+        feed.close()
         await runner.cleanup()
         print(f"pfusion view: cannot listen on {args.host}:{args.port} ({e.strerror}): "
               "pass --port with a free port", file=sys.stderr)
         return 2
     port = runner.addresses[0][1]
     print(f"view: http://{args.host}:{port}/", flush=True)
-    feed = Feed(session, hub, root, loop)
     tasks = [asyncio.create_task(feed.pump()), asyncio.create_task(feed.watch_alive())]
     try:
         await stop.wait()

@@ -6,7 +6,9 @@ Flow control per page (a slow browser never blocks anything else): a page's feed
 the topics changed since its previous message, then waits for the page's ``ack`` (sent
 after it has drawn the message) and ``MIN_INTERVAL_S``. At most one message per page is
 in flight; while a page is slow the model keeps only the latest state per topic, so
-nothing queues for it. Each topic is JSON-encoded once per version for all pages.
+nothing queues for it. Each topic is JSON-encoded once per version for all pages, and
+frames are not compressed (permessage-deflate would compress every message again for
+every page: the per-page cost would be a compression, not a socket write).
 """
 
 from __future__ import annotations
@@ -18,11 +20,12 @@ from collections import Counter
 from importlib.resources import files
 from typing import Any
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from common.wire.view_model import ViewModel
 
 MIN_INTERVAL_S = 0.1
+CLOSE_TIMEOUT_S = 1.0
 STATIC = files("services.view") / "static"
 CONTENT_TYPES = {".html": "text/html", ".js": "text/javascript", ".css": "text/css"}
 log = logging.getLogger("view")
@@ -36,7 +39,7 @@ class Hub:
         self.generation = 0
         self._changed = asyncio.Event()
         self.counters: Counter[str] = Counter()
-        self.pages = 0
+        self.sockets: set[web.WebSocketResponse] = set()
 
     def bump(self) -> None:
         """The model changed: wake every page feed."""
@@ -50,7 +53,7 @@ class Hub:
         return self.generation
 
     def stats(self) -> dict[str, Any]:
-        return {"pages": self.pages, "generation": self.generation, **self.counters}
+        return {"pages": len(self.sockets), "generation": self.generation, **self.counters}
 
 
 async def _feed(ws: web.WebSocketResponse, hub: Hub, acked: asyncio.Event) -> None:
@@ -73,17 +76,18 @@ async def _feed(ws: web.WebSocketResponse, hub: Hub, acked: asyncio.Event) -> No
 async def websocket(request: web.Request) -> web.WebSocketResponse:
     """One page: its feed runs beside this loop, which reads the page's acks."""
     hub: Hub = request.app["hub"]
-    ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096)
+    ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096, compress=False,
+                               timeout=CLOSE_TIMEOUT_S)
     await ws.prepare(request)
     acked = asyncio.Event()
-    hub.pages += 1
+    hub.sockets.add(ws)
     feed = asyncio.create_task(_feed(ws, hub, acked))
     try:
         async for msg in ws:
             if msg.type == WSMsgType.TEXT and msg.data == "ack":
                 acked.set()
     finally:
-        hub.pages -= 1
+        hub.sockets.discard(ws)
         feed.cancel()
         await asyncio.gather(feed, return_exceptions=True)
     return ws
@@ -105,9 +109,16 @@ async def stats(request: web.Request) -> web.Response:
     return web.Response(text=json.dumps(request.app["hub"].stats()), content_type="application/json")
 
 
+async def _close_pages(a: web.Application) -> None:
+    """On shutdown: close every page's socket (a stalled one within CLOSE_TIMEOUT_S)."""
+    await asyncio.gather(*(ws.close(code=WSCloseCode.GOING_AWAY, message=b"view stopped")
+                           for ws in set(a["hub"].sockets)), return_exceptions=True)
+
+
 def app(hub: Hub) -> web.Application:
     a = web.Application()
     a["hub"] = hub
+    a.on_shutdown.append(_close_pages)
     a.add_routes([web.get("/", static), web.get("/ws", websocket), web.get("/stats", stats),
                   web.get("/{name}", static)])
     return a
