@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/pfusion demo
+	$(VENV)/bin/pfusion demo --view
 
 test: $(STAMP)
 	$(PY) -m pytest -q --durations=15 tests

@@ -278,3 +278,10 @@ def test_demo_serves_the_view_while_it_runs(tmp_path: Path) -> None:
         if demo.poll() is None:
             demo.kill()
             demo.wait()
+
+
+def test_view_logs_in_as_the_read_only_operator() -> None:
+    """Under [zenoh.auth] the view is the operator: it may read everything, publish nothing."""
+    from common.deploy.acl import OPERATOR, identity_of
+
+    assert identity_of("view") == OPERATOR
