@@ -40,6 +40,8 @@ from common.core.assignment import gnn
 from common.core.gating import gate, pair_distances
 from common.sonar.bearing_crossing import BearingCrossing
 from common.sonar.bearing_history import BearingHistory
+from common.sonar.bearing_imm import BearingImm
+from common.sonar.bearing_merge import merged_tentative
 from common.sonar.bearing_model import (
     gate_value,
     linear_array_sigma,
@@ -51,7 +53,7 @@ from common.sonar.bearing_model import (
 from common.core.crossing import CrossingParams
 from common.core.kalman import predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
-from common.sonar.multiline import NEW, MultiLineGrouper, group_means
+from common.sonar.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
 from common.core.rejection import Rejected
 from common.core.track_table import Status, TrackTable
 
@@ -63,6 +65,10 @@ class TrackerParams:
     mode: "broadband" z = [brg, amp], "narrowband" z = [brg, amp, freq], or "auto"
         (the service picks narrowband when the first detection list carries freq[]).
     q_theta, q_a, q_f: process noise powers of Q (rad^2/s^3, dB^2/s^3, Hz^2/s^3).
+    q_theta_quiet: bearing noise power of the quiet model of the bearing-rate IMM, whose
+        manoeuvre model has q_theta (common.sonar.bearing_imm); the IMM runs when
+        0 < q_theta_quiet < q_theta, a single model with q_theta otherwise.
+    imm_sojourn_s: mean sojourn times (s) of the quiet and the manoeuvre model.
     sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
     p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL).
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
@@ -74,10 +80,15 @@ class TrackerParams:
     band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
     ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
+    d_merge: a tentative track within this squared distance of a confirmed track (over
+        the measurement components, both covariances) is dropped (000 d_merge; 9.21 is
+        the 99 % chi-square quantile of 2 degrees of freedom).
     """
 
     mode: Literal["auto", "broadband", "narrowband"] = "auto"
     q_theta: float = 1e-8
+    q_theta_quiet: float = 1e-10
+    imm_sojourn_s: list[float] = field(default_factory=lambda: [600.0, 60.0])
     q_a: float = 1e-4
     q_f: float = 1e-6
     sigma_amp_db: float = 3.0
@@ -97,16 +108,7 @@ class TrackerParams:
     ml_brg_tol_deg: float = 2.0
     ml_rate_tol_deg_s: float = 0.1
     history_keep_deleted: int = 64
-
-
-@dataclass(frozen=True)
-class MultiLineTrack:
-    """A multi-line track (claims 12-13): its number, line track ids, mean bearing/rate."""
-
-    id: int
-    lines: np.ndarray
-    brg: float
-    brg_rate: float
+    d_merge: float = 9.21
 
 
 @dataclass(frozen=True)
@@ -146,10 +148,13 @@ class BearingTracker:
         self.m, self.n = self.H.shape
         self.beam = math.radians(p.beam_spacing_deg)
         self.T1, self.T2 = thresholds(p.alpha, p.beta)
+        self.imm = (BearingImm((p.q_theta_quiet, p.q_theta), tuple(p.imm_sojourn_s))
+                    if 0.0 < p.q_theta_quiet < p.q_theta else None)
         self.table = TrackTable(
             self.n,
             extra={"L_max": ((), np.float64), "uid": ((), np.int64),
-                   "ml": ((), np.int64), "ambiguous": ((), np.bool_)},
+                   "ml": ((), np.int64), "ambiguous": ((), np.bool_), "mu": ((2,), np.float64),
+                   "xm": ((2, self.n), np.float64), "Pm": ((2, self.n, self.n), np.float64)},
         )
         self.crossing = (BearingCrossing(crossing or CrossingParams(), self.H,
                                          p.band_hz if self.narrowband else None)
@@ -168,11 +173,12 @@ class BearingTracker:
     def _F(self, T: np.ndarray) -> np.ndarray:
         return bearing_freq_F(T) if self.narrowband else bearing_F(T)
 
-    def _Q(self, T: np.ndarray) -> np.ndarray:
+    def _Q(self, T: np.ndarray, q_theta: float | None = None) -> np.ndarray:
         p = self.params
+        q = p.q_theta if q_theta is None else q_theta
         if self.narrowband:
-            return bearing_freq_Q(T, p.q_theta, p.q_a, p.q_f)
-        return bearing_Q(T, p.q_theta, p.q_a)
+            return bearing_freq_Q(T, q, p.q_a, p.q_f)
+        return bearing_Q(T, q, p.q_a)
 
     def bearing_sigma(self, brg: np.ndarray, amp: np.ndarray, heading: float) -> np.ndarray:
         """sigma^mess of the bearing: 000 claim 6 for linear arrays, sigma0 otherwise."""
@@ -221,8 +227,10 @@ class BearingTracker:
 
         idx = tab.active_indices()
         x, P = tab.x[idx], tab.P[idx]
-        if idx.size:
-            T = t - tab.t_last[idx]
+        T = t - tab.t_last[idx]
+        if idx.size and self.imm is not None:
+            c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T), self._Q)
+        elif idx.size:
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
@@ -238,7 +246,10 @@ class BearingTracker:
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
         R = _diag(Rd[cols_])
 
-        if rows.size:  # 000 x^(k/k), K(k), Joseph-form P^(k/k)
+        if idx.size and self.imm is not None:  # 000 x^(k/k) per model, combined
+            tab.mu[idx], tab.xm[idx], tab.Pm[idx], x, P = self.imm.update(
+                c, xm, Pm, rows, z[cols_], H, R, alpha[rows])
+        elif rows.size:  # 000 x^(k/k), K(k), Joseph-form P^(k/k)
             xu, Pu, _, _ = update(x[rows], P[rows], y, H, R, joseph=True, gain_scale=alpha[rows])
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
@@ -258,7 +269,9 @@ class BearingTracker:
         tab.n_updates[idx] += hit
         tab.n_coast[idx] = np.where(hit, 0, tab.n_coast[idx] + 1)
         tab.status[idx[confirm]] = Status.CONFIRMED
-        self._delete(idx[delete])
+        conf = tab.status[idx] == Status.CONFIRMED
+        merged = merged_tentative(x, P, H, conf, p.d_merge) & ~delete  # 000 d_merge
+        self._delete(idx[delete | merged])
 
         unused = ~gated
         unused[cols_] = False
@@ -333,6 +346,9 @@ class BearingTracker:
         var[:, 0::2] = Rd
         var[:, 1::2] = np.square(rates)
         tab.P[slots] = _diag(var)
+        tab.xm[slots] = tab.x[slots, None, :]
+        tab.Pm[slots] = tab.P[slots, None]
+        tab.mu[slots] = self.imm.mu0 if self.imm is not None else (1.0, 0.0)
         tab.t_last[slots] = t
         tab.L_max[slots] = 0.0
         tab.ml[slots] = NEW
@@ -350,14 +366,8 @@ class BearingTracker:
         if conf.size == 0:
             self._ml_tracks = []
             return
-        labels = self.multiline.step(tab.ml[conf], tab.x[conf, 0], tab.x[conf, 1])
-        tab.ml[conf] = labels
-        groups, mb, mr, inv = group_means(labels, tab.x[conf, 0], tab.x[conf, 1])
-        ids = tab.id[conf]
-        self._ml_tracks = [
-            MultiLineTrack(int(g), ids[inv == i], float(mb[i]), float(mr[i]))
-            for i, g in enumerate(groups)
-        ]
+        tab.ml[conf], self._ml_tracks = multiline_tracks(
+            self.multiline, tab.id[conf], tab.ml[conf], tab.x[conf, 0], tab.x[conf, 1])
 
     def _cycle(self, t: float, live: np.ndarray) -> Cycle:
         tab = self.table

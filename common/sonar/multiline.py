@@ -17,6 +17,8 @@ Once per cycle, `MultiLineGrouper.step`:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -91,3 +93,23 @@ class MultiLineGrouper:
         """The k smallest positive numbers not used by a current label."""
         used = labels[labels != NEW]
         return np.setdiff1d(np.arange(1, used.size + k + 1), used)[:k]
+
+
+@dataclass(frozen=True)
+class MultiLineTrack:
+    """A multi-line track (claims 12-13): its number, line track ids, mean bearing/rate."""
+
+    id: int
+    lines: np.ndarray
+    brg: float
+    brg_rate: float
+
+
+def multiline_tracks(grouper: MultiLineGrouper, ids: np.ndarray, labels: np.ndarray,
+                     brg: np.ndarray, rate: np.ndarray) -> tuple[np.ndarray, list[MultiLineTrack]]:
+    """One cycle of claims 12-13 over the confirmed line tracks (ids, previous labels,
+    bearings, bearing rates): their new labels and the multi-line tracks."""
+    labels = grouper.step(labels, brg, rate)
+    groups, mb, mr, inv = group_means(labels, brg, rate)
+    return labels, [MultiLineTrack(int(g), ids[inv == i], float(mb[i]), float(mr[i]))
+                    for i, g in enumerate(groups)]

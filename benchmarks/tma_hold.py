@@ -1,0 +1,117 @@
+"""TMA accuracy and consistency on the two geometries of issue 13, in one process, 20 seeds:
+final position error RMS against the Cramer-Rao bound, and the NEES of the published
+covariance, with the bearings TMA is fed: the raw associated detections (what the bearing
+tracker associated, true covariance sigma^2 I) or the tracker's filtered bearings
+(x[0], sqrt(P[0,0]) of common.sonar.bearing_tracker, what services/tma uses today).
+
+Run: .venv/bin/python benchmarks/tma_hold.py [--runs 20]
+
+Geometries:
+  close   a 15 kn target passing about 1 km from the own ship (5 kn), 2 deg noise,
+          60 s, 30 samples, own ship turning 60 deg at sample 15;
+  5 turns own ship 5 kn zig-zagging 045/135 with five turns over 30 min, target 8 km
+          away at 4 kn, 1.5 deg noise, one bearing every 20 s (90 samples).
+Goals (exit code 1 when one fails), raw detections: RMS <= 1.3 x CRLB, no run above
+5 x CRLB, mean NEES (4 dof: x, y, vx, vy at the last time) inside its 95 % interval.
+The filtered feed is printed beside, as the measurement that motivates the change.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from common.evaluation.pcrlb import mean_nees_interval  # noqa: E402
+from common.sonar.bearing_tracker import BearingTracker, TrackerParams  # noqa: E402
+from common.sonar.crlb import position_rms_bound  # noqa: E402
+from common.sonar.tma import solve_tma  # noqa: E402
+
+KN = 1852.0 / 3600.0
+
+
+def own_path(t: np.ndarray, course_deg: np.ndarray, speed: float) -> np.ndarray:
+    """Own positions at t for the course held over each interval (course_deg per sample)."""
+    c = np.radians(course_deg[:-1])
+    step = speed * np.diff(t)[:, None] * np.stack((np.sin(c), np.cos(c)), 1)
+    return np.vstack(([0.0, 0.0], np.cumsum(step, 0)))
+
+
+def geometry(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Sample times, own positions, true target (x0, y0, vx, vy) at t = 0, bearing sigma."""
+    if name == "close":
+        t = np.arange(30) * 2.0
+        own = own_path(t, np.where(np.arange(30) < 15, 0.0, 60.0), 5 * KN)
+        v = 15 * KN
+        beta = np.array([1000.0, 30 * 2.0 * 0.5 * v + 77.0, 0.0, -v])  # CPA about 1 km near t = 30 s
+        return t, own, beta, math.radians(2.0)
+    t = np.arange(90) * 20.0
+    course = np.select([t < 300, t < 600, t < 900, t < 1200, t < 1500], [45, 135, 45, 135, 45], 135.0)
+    crs = math.radians(250.0)
+    return t, own_path(t, course, 5 * KN), np.array([3000.0, 7500.0, 4 * KN * math.sin(crs),
+                                                      4 * KN * math.cos(crs)]), math.radians(1.5)
+
+
+def bearings(t: np.ndarray, own: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    x, y = beta[0] + beta[2] * t, beta[1] + beta[3] * t
+    return np.arctan2(x - own[:, 0], y - own[:, 1])
+
+
+def filtered(t: np.ndarray, z: np.ndarray, sig: float) -> tuple[np.ndarray, np.ndarray]:
+    """The bearing tracker's filtered bearings and sigmas of the one contact."""
+    tr = BearingTracker(replace(TrackerParams(mode="broadband"), crossing=False), "cylindrical", sig)
+    b, s = np.empty(t.size), np.empty(t.size)
+    for k in range(t.size):
+        c = tr.step(t[k], np.array([z[k] % (2 * math.pi)]), np.array([100.0]), 0.0)
+        first = int(np.argmin(c.ids))
+        b[k], s[k] = c.x[first, 0], math.sqrt(c.P[first, 0, 0])
+    return b, s
+
+
+def run(name: str, runs: int) -> tuple[dict[str, np.ndarray], float]:
+    """Per feed: (runs, 2) final position error (m) and NEES; and the CRLB (m)."""
+    t, own, beta, sig = geometry(name)
+    truth = bearings(t, own, beta)
+    bound = position_rms_bound(beta, t, own, sig, 0.0, float(t[-1]))
+    x_true = np.array([beta[0] + beta[2] * t[-1], beta[1] + beta[3] * t[-1], beta[2], beta[3]])
+    out: dict[str, list[tuple[float, float]]] = {"raw": [], "filtered": []}
+    for seed in range(runs):
+        z = truth + sig * np.random.default_rng(seed).standard_normal(t.size)
+        fb, fs = filtered(t, z, sig)
+        for feed, (b, s) in {"raw": (z, np.full(t.size, sig)), "filtered": (fb, fs)}.items():
+            sol = solve_tma(t, b, s, own, 0.0)
+            x, P = sol.state_at(float(t[-1]))
+            e = x - x_true
+            out[feed].append((float(np.hypot(e[0], e[1])), float(e @ np.linalg.solve(P, e))))
+    return {k: np.array(v) for k, v in out.items()}, bound
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=20)
+    a = ap.parse_args(argv)
+    lo, hi = mean_nees_interval(4, a.runs)
+    ok = True
+    print(f"{'geometry':<10}{'feed':<10}{'CRLB m':>9}{'RMS m':>9}{'RMS/CRLB':>9}{'max/CRLB':>9}"
+          f"{'NEES':>8}  (95 % interval {lo:.2f}-{hi:.2f})")
+    for name in ("close", "5 turns"):
+        res, bound = run(name, a.runs)
+        for feed, r in res.items():
+            rms = float(np.sqrt(np.mean(r[:, 0] ** 2)))
+            nees = float(np.mean(r[:, 1]))
+            print(f"{name:<10}{feed:<10}{bound:>9.1f}{rms:>9.1f}{rms / bound:>9.2f}"
+                  f"{r[:, 0].max() / bound:>9.2f}{nees:>8.2f}")
+            if feed == "raw":
+                ok &= rms <= 1.3 * bound and r[:, 0].max() <= 5 * bound and lo <= nees <= hi
+    print("goals met" if ok else "GOAL FAILED: RMS <= 1.3 CRLB, max <= 5 CRLB, NEES in its interval")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
