@@ -84,7 +84,8 @@ def run(name: str, seed: int, scans: int | None) -> Row:
     from common.sim.scenario import radar_scene
     from common.wire.sim_messages import truth_state
 
-    path = REPO / "scenarios" / f"{name}.toml"
+    path = Path(name) if name.endswith(".toml") else REPO / "scenarios" / f"{name}.toml"
+    name = path.stem
     cfg = load(path)
     scn = load_scenario(tomllib.loads(path.read_text()))
     chain = RadarChain(cfg)
@@ -158,7 +159,8 @@ def table(rows: list[Row]) -> list[str]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenes", nargs="+", default=["dense", "dense300", "dense1000"])
+    ap.add_argument("--scenes", nargs="+", default=["dense", "dense300", "dense1000"],
+                    help="names in scenarios/ or paths of .toml files")
     ap.add_argument("--scans", type=int, default=None, help="default: the whole scenario")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--profile", action="store_true", help="cProfile of the run, by cumulative time")

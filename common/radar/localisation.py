@@ -222,30 +222,35 @@ def _slr(
     x: np.ndarray, S: np.ndarray, c: Constraints, z_min: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Statistical linear regression of the ranges and azimuths over N(x, S): mean
-    (N, 2K), slope A (N, 2K, 3) and linearisation error covariance Omega (N, 2K, 2K),
-    from the 6 unscented points x +- sqrt(3) S^(1/2) (kappa = 0) of the function h(X)
-    evaluated with z kept >= z_min (a function of X flat below z_min: the regression is
-    on the points themselves, so that its slope stays that of the data). Omega =
-    Cov(Y) - Psi' S^-1 Psi is the Schur complement of the points' joint sample
-    covariance of (X, Y), whose X block is S (> 0): positive semi-definite by construction
-    (clamp or not), so it is only symmetrised (an eigenvalue clip here cost 15 % of a
-    dense.toml fusion cycle and changed nothing above rounding)."""
+    (N, 2K), slope A (N, 2K, 3) and a factor U (N, 2K, 3) of the linearisation error
+    covariance Omega = U U', from the 6 unscented points x +- L e_i, L = sqrt(3) S^(1/2)
+    (kappa = 0), of the function h(X) evaluated with z kept >= z_min (a function of X
+    flat below z_min: the regression is on the points themselves, so that its slope
+    stays that of the data).
+
+    Closed forms of the regression on these points (dY+-: the + and - points' outputs
+    minus their mean): Psi = L (dY+ - dY-) / 6 and S = L L' / 3, so
+    A = Psi' S^-1 = (dY+ - dY-)' L^-1 / 2, and Omega = Cov(Y) - Psi' S^-1 Psi, the
+    part of dY outside the span of the antisymmetric point pairs, is
+    (dY+ + dY-)' (dY+ + dY-) / 12: positive semi-definite, of rank <= 3 (used by
+    `linearised_position` through the Woodbury identity). Equal to the general formulas
+    to rounding; they cost a third of a dense.toml fusion cycle (eigenvalue clip of
+    Omega, inverse of S, 2K x 2K solves)."""
     lam, V = np.linalg.eigh(S)
-    L = V * np.sqrt(3.0 * np.maximum(lam, 0.0))[:, None, :]
+    s = np.sqrt(3.0 * np.maximum(lam, 0.0))
+    L = V * s[:, None, :]
     dev = np.concatenate([np.swapaxes(L, 1, 2), -np.swapaxes(L, 1, 2)], axis=1)  # (N, 6, 3)
-    pts = x[:, None, :] + dev
-    at = pts.copy()
+    at = x[:, None, :] + dev
     at[..., 2] = np.maximum(at[..., 2], z_min)
-    _, ref_az, _ = residuals(x, c)
-    ref_az = c.az - ref_az  # azimuths at x
+    d_r = x[:, None, :] - c.rx
+    ref_az = np.arctan2(d_r[..., 0], d_r[..., 1])  # azimuths at x
     Y = _predict_meas(at, c, ref_az)
     y_mean = Y.mean(axis=1)
-    dY = Y - y_mean[:, None, :]
-    dX = pts - pts.mean(axis=1, keepdims=True)
-    Psi = np.swapaxes(dX, 1, 2) @ dY / 6.0  # (N, 3, 2K)
-    A = np.swapaxes(_inv_sym(S) @ Psi, 1, 2)
-    Omega = np.swapaxes(dY, 1, 2) @ dY / 6.0 - A @ Psi  # A S A' = Psi' S^-1 Psi = A Psi
-    return y_mean, A, 0.5 * (Omega + np.swapaxes(Omega, 1, 2))
+    plus, minus = Y[:, :3] - y_mean[:, None, :], Y[:, 3:] - y_mean[:, None, :]
+    inv_s = np.divide(1.0, s, out=np.zeros_like(s), where=s > 0)  # L^-1 = diag(1/s) V'
+    A = 0.5 * (np.swapaxes(plus - minus, 1, 2) * inv_s[:, None, :]) @ np.swapaxes(V, 1, 2)
+    U = np.swapaxes(plus + minus, 1, 2) / np.sqrt(12.0)
+    return y_mean, A, U
 
 
 def _inv_sym(A: np.ndarray) -> np.ndarray:
@@ -301,24 +306,30 @@ def linearised_position(
     meas = np.concatenate([c.rb, c.az], axis=1)
     sig2 = np.concatenate([c.srb, c.saz], axis=1) ** 2
     mask = np.concatenate([w, w], axis=1)
-    eye = np.eye(2 * K)
+    d_inv = 1.0 / np.where(mask > 0, sig2, 1.0)  # D^-1, R_eff = D + U U' (invalid rows: 1)
+    eye3 = np.eye(3)
     for it in range(iterations + 1):
-        y, A, Omega = _slr(x, S, c, z_min)
+        y, A, U = _slr(x, S, c, z_min)
         d = meas - y
         d[:, K:] = wrap_pi(d[:, K:])
         d *= mask
         A = A * mask[..., None]
-        R_eff = (Omega + sig2[:, :, None] * eye) * mask[:, :, None] * mask[:, None, :]
-        R_eff += (1.0 - mask)[:, :, None] * eye
-        AtW = np.swapaxes(np.linalg.solve(R_eff, A), 1, 2)  # A' R_eff^-1 (N, 3, 2K)
-        info = AtW @ A
-        g = (AtW @ d[..., None])[..., 0]
+        U = U * mask[..., None]
+        # Woodbury: R_eff^-1 = D^-1 - D^-1 U (I + U' D^-1 U)^-1 U' D^-1
+        DA, Dd, DU = A * d_inv[..., None], d * d_inv, U * d_inv[..., None]
+        Ut = np.swapaxes(U, 1, 2)
+        UDA, UDd = Ut @ DA, (Ut @ Dd[..., None])[..., 0]
+        CiX = np.linalg.solve(eye3 + Ut @ DU, np.concatenate([UDA, UDd[..., None]], axis=2))
+        UDAt = np.swapaxes(UDA, 1, 2)
+        info = np.swapaxes(A, 1, 2) @ DA - UDAt @ CiX[..., :3]  # A' R_eff^-1 A
+        g = (np.swapaxes(A, 1, 2) @ Dd[..., None])[..., 0] - (UDAt @ CiX[..., 3:])[..., 0]
         if it == iterations:
             break
         S = _inv_sym(info + J0)
         x = x + (S @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
         x[:, 2] = np.maximum(x[:, 2], z_min)
         S = 0.5 * (S + np.swapaxes(S, 1, 2))
+    R_eff = U @ Ut + np.eye(2 * K) / d_inv[:, :, None]
     R = _inv_sym(info + np.eye(3) / floor_sigma**2)
     z = x + (R @ g[..., None])[..., 0]
     post = x + (_inv_sym(info + J0) @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
