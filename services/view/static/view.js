@@ -234,16 +234,21 @@ function waterfall(canvas, w) {
   for (let b = 0; b <= 360; b += 45) { ctx.fillRect(X(b), 0, 1, H); ctx.fillText(`${b}`, Math.min(X(b) + 2, W - 18), H + 11); }
   ctx.fillStyle = "#cfd8dc";
   w.rows.forEach(([t, brgs]) => brgs.forEach((b) => ctx.fillRect(X(b) - 1, Y(t) - 1, 2, 2)));
+  const dt = w.rows.length > 1 ? (t1 - w.rows[0][0]) / (w.rows.length - 1) : 1;
   Object.entries(w.tracks).forEach(([id, pts]) => {
-    const last = pts[pts.length - 1];
-    ctx.strokeStyle = last[2] ? COLOURS.confirmed : COLOURS.tentative; ctx.lineWidth = 1.5;
+    // confirmed stretches as lines (broken at gaps of 3 scans and through North),
+    // tentative estimates as small marks
+    ctx.strokeStyle = COLOURS.confirmed; ctx.fillStyle = COLOURS.tentative; ctx.lineWidth = 1.5;
     ctx.beginPath();
     pts.forEach((p, j) => {
-      const jump = j && Math.abs(p[1] - pts[j - 1][1]) > 180;  // wrapped through North
-      (j && !jump) ? ctx.lineTo(X(p[1]), Y(p[0])) : ctx.moveTo(X(p[1]), Y(p[0]));
+      const q = pts[j - 1];
+      if (!p[2]) { ctx.fillRect(X(p[1]) - 1.5, Y(p[0]) - 0.5, 3, 1); return; }
+      const join = q && q[2] && p[0] - q[0] <= 3 * dt && Math.abs(p[1] - q[1]) <= 180;
+      join ? ctx.lineTo(X(p[1]), Y(p[0])) : ctx.moveTo(X(p[1]), Y(p[0]));
     });
     ctx.stroke();
-    ctx.fillStyle = ctx.strokeStyle; ctx.fillText(id, X(last[1]) + 3, Y(last[0]) + 10);
+    const last = pts[pts.length - 1];
+    if (last[2]) { ctx.fillStyle = COLOURS.confirmed; ctx.fillText(id, X(last[1]) + 3, Y(last[0]) + 10); }
   });
 }
 
