@@ -63,11 +63,11 @@ from common.core.rejection import Rejected
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.bearing_model import detection_probability, linear_array_sigma, measurement_matrix
 from common.sonar.bearing_tracker import Cycle, TrackerParams
-from common.sonar.mht_conflict import unresolved_probability
 from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
                                          miss_weights, mixture_moments, pair_distance2, prune,
                                          sprt, track_sums)
-from common.sonar.mht_tracks import TrackArrays, resolve_conflicts, relink
+from common.sonar.mht_tracks import (TrackArrays, conflict_flags, duplicates, relink,
+                                     resolve_conflicts)
 from common.sonar.multiline import NEW
 from common.sonar.retrodiction import CycleRecord, Retrodiction
 
@@ -247,12 +247,12 @@ class MhtTracker:
         was = tr.SA.copy()
         main = heaviest(self.hc, self.ht, tr.size)
         mmeas = np.where(main >= 0, self.hmeas[np.maximum(main, 0)], -1)
-        dup = self._duplicates(mmeas, z.shape[0])
+        dup = duplicates(tr, mmeas, z.shape[0])
         tr.ZA, tr.SA, norm = sprt(np.where(dup, np.minimum(LR, mp.B), LR), tr.ZA, tr.SA,
                                   mp.A, mp.B, mp.za_krit, mp.za_max)
         self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
         tr.no_b = np.where(norm, 0, tr.no_b + 1)
-        self._conflict_flags()
+        conflict_flags(self)
         newly = np.flatnonzero((tr.SA == 1) & (was == 0))
         drop = relink(self, newly)
         drop |= self._merge_tracks()  # 000 track merge
@@ -359,44 +359,6 @@ class MhtTracker:
         newer = np.where(tr.uid[a] > tr.uid[b], a, b)
         drop[newer] = True
         return drop
-
-    def _duplicates(self, mmeas: np.ndarray, M: int) -> np.ndarray:
-        """Tentative tracks whose main hypothesis took the measurement of a confirmed
-        track's or an older track's main hypothesis (they do not pass the SPRT)."""
-        tr = self.tr
-        has = mmeas >= 0
-        if M == 0:
-            return has
-        by_conf = np.zeros(M, dtype=bool)
-        by_conf[mmeas[has & (tr.SA == 1)]] = True
-        oldest = np.full(M, np.iinfo(np.int64).max)
-        np.minimum.at(oldest, mmeas[has], tr.uid[has])
-        safe = np.maximum(mmeas, 0)
-        return (tr.SA == 0) & has & (by_conf[safe] | (oldest[safe] < tr.uid))
-
-    def _conflict_flags(self) -> None:
-        """000 conflict detection: confirmed tracks whose main hypotheses processed the
-        same measurement get IN = each other; a conflict whose P_u fell below 1e-3 ends."""
-        tr = self.tr
-        main = heaviest(self.hc, self.ht, tr.size)
-        meas = np.where(main >= 0, self.hmeas[np.maximum(main, 0)], -1)
-        brg = self.hx[np.maximum(main, 0), 0]
-        res = math.radians(self.mp.res_deg)
-        for i in np.flatnonzero(tr.IN >= 0):
-            j = tr.slot_of(int(tr.IN[i]))
-            if j < 0 or unresolved_probability(brg[i] - brg[j], res) < 1e-3:
-                tr.IN[i] = -1
-        conf = np.flatnonzero((tr.SA == 1) & (meas >= 0) & (tr.IN < 0))
-        order = conf[np.argsort(meas[conf], kind="stable")]
-        for a, b in zip(order[:-1], order[1:]):
-            if meas[a] == meas[b] and tr.IN[a] < 0 and tr.IN[b] < 0:
-                tr.IN[a], tr.IN[b] = tr.uid[b], tr.uid[a]
-                tr.k_auf[a] = tr.k_auf[b] = self.k
-                tr.pre_rate[[a, b]] = tr.last_rate[[a, b]]
-                tr.pre_amp[[a, b]] = tr.last_amp[[a, b]]
-        ok = main >= 0
-        tr.last_rate[ok] = self.hx[main[ok], 1]
-        tr.last_amp[ok] = self.hx[main[ok], 2]
 
     # ------------------------------------------------------------------ register
 

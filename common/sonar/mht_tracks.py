@@ -1,6 +1,7 @@
 """Track-level state of the multiple-hypothesis tracker (common.sonar.mht) and its
 resolution-conflict steps: per-track arrays (000 SA, ZA, IN and the conflict memory),
-the modified correction of conflicting pairs, and the re-link at the end of a conflict.
+the duplicate rule of the confirmation test, conflict detection, the modified
+correction of conflicting pairs, and the re-link at the end of a conflict.
 Equations and deviations: common.sonar.mht_conflict and common.sonar.mht.
 """
 
@@ -11,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from common.sonar.mht_conflict import interpret, relink_choice
+from common.sonar.mht_conflict import interpret, relink_choice, unresolved_probability
 from common.sonar.mht_hypotheses import heaviest, pair_distance2
 
 if TYPE_CHECKING:
@@ -80,6 +81,45 @@ class TrackArrays:
         """Slot of a track number, -1 if not live."""
         hit = np.flatnonzero(self.uid == uid)
         return int(hit[0]) if hit.size else -1
+
+
+def duplicates(tr: TrackArrays, mmeas: np.ndarray, M: int) -> np.ndarray:
+    """Tentative tracks whose main hypothesis took the measurement of a confirmed
+    track's or an older track's main hypothesis (they do not pass the SPRT)."""
+    has = mmeas >= 0
+    if M == 0:
+        return has
+    by_conf = np.zeros(M, dtype=bool)
+    by_conf[mmeas[has & (tr.SA == 1)]] = True
+    oldest = np.full(M, np.iinfo(np.int64).max)
+    np.minimum.at(oldest, mmeas[has], tr.uid[has])
+    safe = np.maximum(mmeas, 0)
+    return (tr.SA == 0) & has & (by_conf[safe] | (oldest[safe] < tr.uid))
+
+
+def conflict_flags(trk: "MhtTracker") -> None:
+    """000 conflict detection: confirmed tracks whose main hypotheses processed the
+    same measurement get IN = each other; a conflict whose P_u fell below 1e-3 ends."""
+    tr = trk.tr
+    main = heaviest(trk.hc, trk.ht, tr.size)
+    meas = np.where(main >= 0, trk.hmeas[np.maximum(main, 0)], -1)
+    brg = trk.hx[np.maximum(main, 0), 0]
+    res = math.radians(trk.mp.res_deg)
+    for i in np.flatnonzero(tr.IN >= 0):
+        j = tr.slot_of(int(tr.IN[i]))
+        if j < 0 or unresolved_probability(brg[i] - brg[j], res) < 1e-3:
+            tr.IN[i] = -1
+    conf = np.flatnonzero((tr.SA == 1) & (meas >= 0) & (tr.IN < 0))
+    order = conf[np.argsort(meas[conf], kind="stable")]
+    for a, b in zip(order[:-1], order[1:]):
+        if meas[a] == meas[b] and tr.IN[a] < 0 and tr.IN[b] < 0:
+            tr.IN[a], tr.IN[b] = tr.uid[b], tr.uid[a]
+            tr.k_auf[a] = tr.k_auf[b] = trk.k
+            tr.pre_rate[[a, b]] = tr.last_rate[[a, b]]
+            tr.pre_amp[[a, b]] = tr.last_amp[[a, b]]
+    ok = main >= 0
+    tr.last_rate[ok] = trk.hx[main[ok], 1]
+    tr.last_amp[ok] = trk.hx[main[ok], 2]
 
 
 def conflict_pairs(tr: TrackArrays) -> list[tuple[int, int]]:
