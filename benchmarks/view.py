@@ -9,9 +9,12 @@ Reported per case: the view's CPU time (user + system, /proc) per published upda
 messages and bytes each page got, the latency from put to page (p50, p99), the updates
 the view took in.
 
+Each case also has one stalled page, which opens its WebSocket and never reads.
+
 Goals (exit code 1 if one fails): the view takes in every published update whatever
-the number of pages (its Zenoh side never waits for a page), and every page ends on the
-last published update (the coalesced stream always delivers the latest state).
+the number of pages (its Zenoh side never waits for a page), every page ends on the
+last published update (the coalesced stream always delivers the latest state), and the
+stalled page was sent one message only (nothing queued for it).
 
 Run: .venv/bin/python benchmarks/view.py [--rate HZ] [--seconds S] [--pages 1 10 50]
 """
@@ -23,6 +26,7 @@ import asyncio
 import json
 import os
 import re
+import socket
 import sys
 import threading
 import time
@@ -108,8 +112,17 @@ def publish(pub: Publisher, rate: float, payloads: list[bytes], t0: float,
         pub.put(p)
 
 
+def stalled_page(port: int) -> socket.socket:
+    """A page that opens its WebSocket and then never reads nor acks."""
+    s = socket.create_connection(("127.0.0.1", port))
+    s.sendall(b"GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    return s
+
+
 async def case(pub: Publisher, pid: int, port: int, pages: int, rate: float, seconds: float,
                t0: float) -> dict[str, Any]:
+    stalled = stalled_page(port)
     async with aiohttp.ClientSession() as http:
         ps = [Page() for _ in range(pages)]
         ready = [asyncio.Event() for _ in ps]
@@ -126,7 +139,9 @@ async def case(pub: Publisher, pid: int, port: int, pages: int, rate: float, sec
         while any(p.last_t < last for p in ps) and time.monotonic() < deadline:
             await asyncio.sleep(0.1)
         cpu = cpu_s(pid) - cpu0
-        taken = view_stats(port).get("in", 0) - in0
+        after = view_stats(port)
+        taken = after.get("in", 0) - in0
+        stalled.close()
         for t in tasks:
             t.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
@@ -139,7 +154,8 @@ async def case(pub: Publisher, pid: int, port: int, pages: int, rate: float, sec
             "kB_msg": sum(p.bytes - b[1] for p, b in zip(ps, before)) / max(sum(msgs), 1) / 1e3,
             "p50": float(np.percentile(lat, 50)) if lat.size else float("nan"),
             "p99": float(np.percentile(lat, 99)) if lat.size else float("nan"),
-            "ended_on_last": all(p.last_t == last for p in ps)}
+            "ended_on_last": all(p.last_t == last for p in ps),
+            "stalled_msgs": min(after["page_messages"])}
 
 
 def main() -> int:
@@ -161,16 +177,17 @@ def main() -> int:
                 time.sleep(0.3)
             print(f"{TRACKS} tracks, {args.rate:g} updates/s for {args.seconds:g} s per case")
             print(f"{'pages':>5} {'published':>9} {'view in':>7} {'view CPU ms/update':>18} {'/page msg':>9} "
-                  f"{'msgs/page min':>13} {'mean':>6} {'kB/msg':>7} {'p50 ms':>7} {'p99 ms':>7} last")
+                  f"{'msgs/page min':>13} {'mean':>6} {'kB/msg':>7} {'p50 ms':>7} {'p99 ms':>7} last stalled")
             for k, pages in enumerate(args.pages):
                 r = asyncio.run(case(pub, view.proc.pid, port, pages, args.rate, args.seconds,
                                      1000.0 * (k + 1)))
-                good = r["taken"] == r["published"] and r["ended_on_last"]
+                good = r["taken"] == r["published"] and r["ended_on_last"] and r["stalled_msgs"] == 1
                 ok &= good
                 print(f"{r['pages']:>5} {r['published']:>9} {r['taken']:>7} {r['cpu_ms']:>18.1f} "
                       f"{r['cpu_ms_msg']:>9.2f} "
                       f"{r['msgs_min']:>13} {r['msgs_mean']:>6.1f} {r['kB_msg']:>7.1f} "
-                      f"{r['p50']:>7.1f} {r['p99']:>7.1f} {'yes' if r['ended_on_last'] else 'NO'}"
+                      f"{r['p50']:>7.1f} {r['p99']:>7.1f} {'yes' if r['ended_on_last'] else ' NO'} "
+                      f"{r['stalled_msgs']:>7}"
                       f"{'' if good else '  GOAL FAILED'}", flush=True)
     finally:
         view.stop()

@@ -17,6 +17,7 @@ import asyncio
 import json
 import logging
 from collections import Counter
+from dataclasses import dataclass, field
 from importlib.resources import files
 from typing import Any
 
@@ -39,7 +40,7 @@ class Hub:
         self.generation = 0
         self._changed = asyncio.Event()
         self.counters: Counter[str] = Counter()
-        self.sockets: set[web.WebSocketResponse] = set()
+        self.pages: set[Page] = set()
 
     def bump(self) -> None:
         """The model changed: wake every page feed."""
@@ -53,21 +54,37 @@ class Hub:
         return self.generation
 
     def stats(self) -> dict[str, Any]:
-        return {"pages": len(self.sockets), "generation": self.generation, **self.counters}
+        """Counters; per page the messages sent to it, and how many pages owe an ack."""
+        return {"pages": len(self.pages), "generation": self.generation, **self.counters,
+                "page_messages": sorted(p.messages for p in self.pages),
+                "waiting": sum(p.waiting for p in self.pages)}
 
 
-async def _feed(ws: web.WebSocketResponse, hub: Hub, acked: asyncio.Event) -> None:
+@dataclass(eq=False)
+class Page:
+    """One connected page: its socket and where its feed stands."""
+
+    ws: web.WebSocketResponse
+    acked: asyncio.Event = field(default_factory=asyncio.Event)
+    messages: int = 0
+    waiting: bool = False
+
+
+async def _feed(page: Page, hub: Hub) -> None:
     """Send a page every changed topic, one message in flight at a time."""
     sent: dict[str, int] = {}
     generation = -1
-    while not ws.closed:
+    while not page.ws.closed:
         text, sent = hub.model.delta(sent)
         if text is not None:
-            await ws.send_str(text)
+            page.waiting = True
+            await page.ws.send_str(text)
+            page.messages += 1
             hub.counters["messages"] += 1
             hub.counters["bytes"] += len(text)
-            await acked.wait()
-            acked.clear()
+            await page.acked.wait()
+            page.acked.clear()
+            page.waiting = False
             await asyncio.sleep(MIN_INTERVAL_S)
             continue
         generation = await hub.wait_newer(generation)
@@ -79,15 +96,15 @@ async def websocket(request: web.Request) -> web.WebSocketResponse:
     ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096, compress=False,
                                timeout=CLOSE_TIMEOUT_S)
     await ws.prepare(request)
-    acked = asyncio.Event()
-    hub.sockets.add(ws)
-    feed = asyncio.create_task(_feed(ws, hub, acked))
+    page = Page(ws)
+    hub.pages.add(page)
+    feed = asyncio.create_task(_feed(page, hub))
     try:
         async for msg in ws:
             if msg.type == WSMsgType.TEXT and msg.data == "ack":
-                acked.set()
+                page.acked.set()
     finally:
-        hub.sockets.discard(ws)
+        hub.pages.discard(page)
         feed.cancel()
         await asyncio.gather(feed, return_exceptions=True)
     return ws
@@ -112,7 +129,7 @@ async def stats(request: web.Request) -> web.Response:
 async def _close_pages(a: web.Application) -> None:
     """On shutdown: close every page's socket (a stalled one within CLOSE_TIMEOUT_S)."""
     await asyncio.gather(*(ws.close(code=WSCloseCode.GOING_AWAY, message=b"view stopped")
-                           for ws in set(a["hub"].sockets)), return_exceptions=True)
+                           for ws in [p.ws for p in a["hub"].pages]), return_exceptions=True)
 
 
 def app(hub: Hub) -> web.Application:

@@ -220,7 +220,10 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         assert details.startswith(f"track {one['id']}  confirmed"), details
         assert "sigmas" in details and "etracks   b" in details and "cycles seen" in details
 
-        assert stats(port)["pages"] == 2  # the browser and the stalled page, which blocked nothing
+        now = stats(port)
+        assert now["pages"] == 2  # the browser and the stalled page, which blocked nothing:
+        assert now["page_messages"][0] == 1 and now["page_messages"][1] > 10  # it got one message
+        assert now["waiting"] >= 1  # and still owes its ack; nothing more was queued for it
         stalled.close()
         victim = next(c for c in d.children if c.name == "elementary-tracker-b3")
         victim.proc.kill()
