@@ -150,3 +150,19 @@ def test_mode_switch_in_the_deployment_file():
     doc["sonar"]["tracker"]["mode_association"] = "jpda"
     with pytest.raises(ConfigError, match="mode_association"):
         section(parse(doc), "sonar.tracker", SonarTrackerParams)
+
+
+def test_split_the_lighter_of_two_far_hypotheses_into_a_tentative_track():
+    trk = tracker()
+    trk.step(0.0, np.array([1.0]), np.array([100.0]), 0.0)
+    x = np.array([[1.0, 0, 20, 0], [1.0 + 0.5 * DEG, 0, 20, 0], [1.2, 0, 20, 0]])
+    P = np.stack([np.diag([DEG**2, 1e-8, 1.0, 1e-3])] * 3)
+    c = np.array([0.5, 0.3, 0.2])
+    track = trk._split(x, P, c, np.zeros(3, dtype=np.intp))
+    # the two heaviest (0.5, 0.3) are 0.35 sigma apart: no split
+    assert track.tolist() == [0, 0, 0] and trk.tr.size == 1
+    c = np.array([0.5, 0.2, 0.3])
+    track = trk._split(x, P, c, np.zeros(3, dtype=np.intp))
+    # now the second heaviest is 11 deg away (d^2 > d_split^2): it becomes track 2
+    assert track.tolist() == [0, 0, 1] and trk.tr.uid.tolist() == [1, 2]
+    assert trk.tr.SA.tolist() == [0, 0] and trk.retro._inherits == {2: (1, 0.0)}
