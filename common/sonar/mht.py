@@ -28,6 +28,12 @@ Deviations (stated):
   `merge_sigma_max_deg`.
 - Order: conflicts are handled before pruning (the seed: after the usual Kalman update),
   so that pruning sees the re-weighted hypotheses.
+- Conflict start: besides the seed's rule (the main hypotheses of two confirmed tracks
+  took the same measurement), a conflict starts when their main predicted hypotheses
+  gate a common measurement, so that the first shared measurement is already
+  interpreted jointly (with the seed's rule alone, the cycle that starts a conflict
+  updated each track alone: seed 10 of sonar_cross_2dpm_eq with 3 false detections per
+  cycle, one track took the other target's detection, jumped 3 deg and was lost).
 - A track split off starts tentative (SA = ZA = 0; the seed lets it inherit the status
   of its track: a confirmed split-off of a clutter hypothesis was a confirmed false
   track, and a duplicate of the target until the SPRT removed it) and shares the

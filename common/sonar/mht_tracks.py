@@ -110,16 +110,23 @@ def conflict_flags(trk: "MhtTracker") -> None:
         if j < 0 or unresolved_probability(brg[i] - brg[j], res) < 1e-3:
             tr.IN[i] = -1
     conf = np.flatnonzero((tr.SA == 1) & (meas >= 0) & (tr.IN < 0))
-    order = conf[np.argsort(meas[conf], kind="stable")]
-    for a, b in zip(order[:-1], order[1:]):
-        if meas[a] == meas[b] and tr.IN[a] < 0 and tr.IN[b] < 0:
-            tr.IN[a], tr.IN[b] = tr.uid[b], tr.uid[a]
-            tr.k_auf[a] = tr.k_auf[b] = trk.k
-            tr.pre_rate[[a, b]] = tr.last_rate[[a, b]]
-            tr.pre_amp[[a, b]] = tr.last_amp[[a, b]]
+    _pair_sharing(tr, conf, meas[conf], trk.k)
     ok = main >= 0
     tr.last_rate[ok] = trk.hx[main[ok], 1]
     tr.last_amp[ok] = trk.hx[main[ok], 2]
+
+
+def _pair_sharing(tr: TrackArrays, slots: np.ndarray, meas: np.ndarray, k: int) -> None:
+    """Start a conflict (IN, k_auf, bearing rate and level from before it) for tracks
+    of `slots` that share a measurement `meas` and are in no conflict yet."""
+    order = np.argsort(meas, kind="stable")
+    for a, b in zip(order[:-1], order[1:]):
+        s, t = int(slots[a]), int(slots[b])
+        if meas[a] == meas[b] and s != t and tr.IN[s] < 0 and tr.IN[t] < 0:
+            tr.IN[s], tr.IN[t] = tr.uid[t], tr.uid[s]
+            tr.k_auf[s] = tr.k_auf[t] = k
+            tr.pre_rate[[s, t]] = tr.last_rate[[s, t]]
+            tr.pre_amp[[s, t]] = tr.last_amp[[s, t]]
 
 
 def conflict_pairs(tr: TrackArrays) -> list[tuple[int, int]]:
@@ -142,10 +149,13 @@ def resolve_conflicts(
     by the moment-matched joint interpretations (1)-(5); each main hypothesis keeps the
     total weight of its children. lgN: log N(z_l) of every child (0 for misses)."""
     tr, mp = trk.tr, trk.mp
+    main = heaviest(trk.hc, trk.ht, tr.size)
+    free = main[(tr.SA == 1) & (main >= 0) & (tr.IN < 0)]
+    sel = np.isin(hi, free)
+    _pair_sharing(tr, trk.ht[hi[sel]], lj[sel], trk.k)  # main predictions gate one measurement
     pairs = conflict_pairs(tr)
     if not pairs:
         return cx, cP, cc, cpar, cmeas
-    main = heaviest(trk.hc, trk.ht, tr.size)
     new: list[tuple[int, int, np.ndarray, np.ndarray, float]] = []
     cc = cc.copy()
     cx, cP = cx.copy(), cP.copy()
