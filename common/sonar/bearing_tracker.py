@@ -18,8 +18,8 @@ time only:
   7. every unassociated detection opens a tentative track, x(1) = H' z, P(1) = P0,
      L(1) = 0 (000 initialisation);
   8. narrowband: multi-line tracks (000 claims 12-13, common.sonar.multiline);
-  9. the bearing register (000 register 13, common.sonar.bearing_history): estimated
-     bearings of every track from its first detection, with the own-ship position, for TMA.
+  9. the bearing register (000 register 13, common.sonar.bearing_history): each track's
+     associated detections (not its estimates: deviation stated there) and own positions.
 
 Amplitude is tracked as a level in dB, a = 10 log10(amp) (000: "la amplitud o el
 nivel"), so that the simulator's log-normal amplitude noise is additive; the linear
@@ -174,11 +174,8 @@ class BearingTracker:
         return bearing_freq_F(T) if self.narrowband else bearing_F(T)
 
     def _Q(self, T: np.ndarray, q_theta: float | None = None) -> np.ndarray:
-        p = self.params
-        q = p.q_theta if q_theta is None else q_theta
-        if self.narrowband:
-            return bearing_freq_Q(T, q, p.q_a, p.q_f)
-        return bearing_Q(T, q, p.q_a)
+        p, q = self.params, self.params.q_theta if q_theta is None else q_theta
+        return bearing_freq_Q(T, q, p.q_a, p.q_f) if self.narrowband else bearing_Q(T, q, p.q_a)
 
     def bearing_sigma(self, brg: np.ndarray, amp: np.ndarray, heading: float) -> np.ndarray:
         """sigma^mess of the bearing: 000 claim 6 for linear arrays, sigma0 otherwise."""
@@ -275,11 +272,14 @@ class BearingTracker:
 
         unused = ~gated
         unused[cols_] = False
-        self._open(t, z[unused], Rd[unused])
+        opened = self._open(t, z[unused], Rd[unused])
         self._group_lines()
 
         live = tab.active_indices()
-        self.history.append(t, tab.uid[live], tab.x[live, 0], np.sqrt(tab.P[live, 0, 0]), own_x, own_y)
+        ok = ~ambiguous[rows]  # the register: associated detections, not the 004-flagged ones
+        reg = np.r_[cols_[ok], np.flatnonzero(unused)]
+        self.history.append(t, np.r_[tab.uid[idx[rows[ok]]], tab.uid[opened]], z[reg, 0],
+                            np.sqrt(Rd[reg, 0]), own_x, own_y)
         self.history.maybe_compact(tab.uid[live])
         self.t = t
         return self._cycle(t, live)
@@ -291,12 +291,10 @@ class BearingTracker:
         |S| and d^2 of the assigned pairs, and the mask (M,) of detections inside the
         gate of a confirmed track.
 
-        The mask implements 000 "medidas superfluas con las que no pueden ser asociadas
-        trazas de marcacion son valoradas como el inicio de una nueva traza": a detection
-        that could be associated with a confirmed track (inside its gate) but lost the
-        GNN assignment does not open a track. Deviation from "every unassociated
-        detection": without it a clutter detection next to a target opens a duplicate
-        track that then takes the target's detections over (seen on sonar_tma)."""
+        The mask implements 000 "medidas superfluas ... el inicio de una nueva traza": a
+        detection inside a confirmed track's gate that lost the GNN assignment opens no
+        track. Deviation from "every unassociated detection": otherwise a clutter detection
+        next to a target opens a duplicate track that takes the target over (sonar_tma)."""
         p, m = self.params, self.m
         N, M = x.shape[0], z.shape[0]
         empty = np.zeros(0, dtype=np.intp)
@@ -331,12 +329,12 @@ class BearingTracker:
             self.crossing.forget(tab.id[slots])
         tab.remove(slots)
 
-    def _open(self, t: float, z: np.ndarray, Rd: np.ndarray) -> None:
+    def _open(self, t: float, z: np.ndarray, Rd: np.ndarray) -> np.ndarray:
         """000 initialisation: one tentative track per unassociated measurement,
         x(1) = H' z, P(1) = P0 (measurement variances, configured rate variances)."""
         k = z.shape[0]
         if k == 0:
-            return
+            return np.zeros(0, dtype=np.intp)
         p, tab = self.params, self.table
         slots = tab.add(k)
         self.history.release(tab.id[slots])
@@ -354,6 +352,7 @@ class BearingTracker:
         tab.ml[slots] = NEW
         tab.uid[slots] = np.arange(self._next_uid, self._next_uid + k)
         self._next_uid += k
+        return slots
 
     def _group_lines(self) -> None:
         """Claims 12-13 over the confirmed line tracks (narrowband only)."""

@@ -1,9 +1,9 @@
 """``pfusion tma --config F --array A``: range, course and speed of every confirmed bearing
 track of one array (TMA of seed 002, constrained TMA with error handling of seed 003).
 
-Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (bearings)
-and root/sonar/tma/bounds/A (bounds at run time); fetches root/sonar/history/A/<id> once
-per newly confirmed track; publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
+Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (confirmed tracks)
+and root/sonar/tma/bounds/A (bounds at run time); fetches root/sonar/history/A/<id> for
+a newly confirmed track and whenever its TMA cycle is due (the associated detections); publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
 
 Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tma.bounds]
 (BoundsParams, default of every array) overridden key by key by [sonar.tma.bounds.<A>].
@@ -94,7 +94,7 @@ def main(args: argparse.Namespace) -> int:
         if dropped:
             svc.reject("no_own_ship", f"{dropped} btracks messages without own-ship position", "sonar/btracks")
         for msg in ready:
-            hist = {tid: history(tid) for tid in mgr.new_confirmed(msg)}
+            hist = {tid: history(tid) for tid in mgr.history_wanted(msg)}
             svc.publish(f"sonar/tma/{arr.id}", mgr.step(msg, hist))
             svc.last_t = msg["t"]
 

@@ -57,22 +57,31 @@ def btracks(t: float, tracks: list[dict[str, Any]], array: str = "a1") -> dict[s
     return {"v": 1, "t": t, "array": array, "tracks": tracks}
 
 
-def history(tid: int, times: np.ndarray) -> dict[str, Any]:
+def history(tid: int, times: np.ndarray, brg: float | None = None) -> dict[str, Any]:
+    """The bearing register of a track: true bearings (or a constant one) at `times`."""
     own = np.array([own_at(t) for t in times])
+    b = np.array([true_brg(t) for t in times]) if brg is None else np.full(times.size, brg)
     return {"v": 1, "t": float(times[-1]), "array": "a1", "id": tid, "status": "confirmed",
-            "t_hist": times, "brg": np.array([true_brg(t) for t in times]), "sbrg": np.full(times.size, SIG),
+            "t_hist": times, "brg": b, "sbrg": np.full(times.size, SIG),
             "own_x": own[:, 0], "own_y": own[:, 1]}
 
 
 def feed(mgr: TmaManager, t: float, tracks: list[dict[str, Any]],
-         histories: dict[int, dict[str, Any] | None] | None = None) -> dict[str, Any] | None:
-    """Own ship, then btracks at t; the tma message (None if nothing was ready)."""
+         histories: dict[int, dict[str, Any] | None] | None = None,
+         brg: dict[int, float] | None = None) -> dict[str, Any] | None:
+    """Own ship, then btracks at t; the tma message (None if nothing was ready). As the
+    service, the manager gets the histories of the tracks it wants: the given ones, else
+    the register every 20 s up to t (true bearings, or the constant brg[tid])."""
     mgr.add_own(t, *own_at(t))
     mgr.push(btracks(t, tracks))
     ready, _ = mgr.ready()
     out = None
     for msg in ready:
-        out = mgr.step(msg, histories or {})
+        times = np.arange(0.0, msg["t"] + 1.0, 20.0)
+        given = histories or {}
+        hist = {tid: given[tid] if tid in given else history(tid, times, (brg or {}).get(tid))
+                for tid in mgr.history_wanted(msg)}
+        out = mgr.step(msg, hist)
     return out
 
 
@@ -121,7 +130,7 @@ def test_track_life_cycle_follows_btracks():
     feed(mgr, 0.0, [btrack(1, 0.0, "tentative"), btrack(2, 0.0)])
     assert set(mgr.tracks) == {2}
     msg = btracks(20.0, [btrack(1, 20.0), btrack(2, 20.0)])
-    assert mgr.new_confirmed(msg) == [1]
+    assert mgr.history_wanted(msg) == [1]  # new; track 2 ran its cycle at 0 s (cycle_dt 60 s)
     feed(mgr, 20.0, msg["tracks"])
     assert set(mgr.tracks) == {1, 2}
     feed(mgr, 40.0, [btrack(1, 40.0)])
@@ -149,10 +158,12 @@ def test_history_start_gives_the_true_solution_at_once():
     assert decoded["solutions"][0]["P"].shape == (16,)
 
 
-def test_without_history_the_track_builds_up_from_btracks():
+def test_a_track_builds_up_from_the_register_fetched_at_each_due_cycle():
     mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
-    outs = [feed(mgr, t, [btrack(3, t)], {3: None}) for t in np.arange(0.0, 1801.0, 20.0)]
-    assert outs[2]["solutions"] == [] and len(outs[3]["solutions"]) == 1  # 4 bearings needed
+    assert feed(mgr, 0.0, [btrack(3, 0.0)], {3: None})["solutions"] == []  # no history: nothing yet
+    outs = [feed(mgr, t, [btrack(3, t)]) for t in np.arange(20.0, 1801.0, 20.0)]
+    assert outs[1]["solutions"] == [] and len(outs[2]["solutions"]) == 1  # 4 bearings needed
+    assert mgr.tracks[3].tracker.t.tolist() == np.arange(0.0, 1801.0, 20.0).tolist()  # each once
     s = outs[-1]["solutions"][0]
     assert s["x"] == pytest.approx(TARGET[0] + TARGET[2] * 1800.0, abs=1.0)
     assert s["phase"] == "post"
@@ -163,7 +174,7 @@ def test_cycle_decimation_and_bearing_thinning():
     times = np.arange(0.0, 1201.0, 20.0)
     sol_t = []
     for t in times:
-        out = feed(mgr, t, [btrack(1, t)], {1: None})
+        out = feed(mgr, t, [btrack(1, t)])
         sol_t.append(out["solutions"][0]["t"] if out["solutions"] else None)
     assert mgr.tracks[1].tracker.t.tolist() == times[::2].tolist()
     assert mgr.cycles == 21  # cycles at 0, 60, ..., 1200 s
@@ -177,20 +188,11 @@ def test_thin_hand_values():
     assert thin(t, 0.0, -np.inf).all()
 
 
-def test_ambiguous_bearings_are_not_used():
-    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
-    for t in (0.0, 20.0, 40.0):
-        feed(mgr, t, [btrack(1, t)])
-    feed(mgr, 60.0, [btrack(1, 60.0, ambiguous=True, brg=1.0)])
-    feed(mgr, 80.0, [btrack(1, 80.0)])
-    assert mgr.tracks[1].tracker.t.tolist() == [0.0, 20.0, 40.0, 80.0]
-
-
 def test_a_collision_course_fails_alone():
     """Constant bearing (relative velocity along the line of sight): range unobservable."""
     mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
     for t in np.arange(0.0, 401.0, 20.0):
-        out = feed(mgr, t, [btrack(1, t), btrack(2, t, brg=math.atan2(3.0, 2.0))])
+        out = feed(mgr, t, [btrack(1, t), btrack(2, t)], brg={2: math.atan2(3.0, 2.0)})
     assert mgr.tracks[2].failures > 0 and mgr.tracks[1].failures == 0
     s1, s2 = out["solutions"]
     assert s1["t"] == 400.0 and s2["t"] < 400.0  # track 2 keeps its last good solution

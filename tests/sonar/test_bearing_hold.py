@@ -62,3 +62,21 @@ def test_a_tentative_track_on_a_confirmed_one_is_merged_a_distant_one_kept() -> 
     wrapped = x.copy()
     wrapped[0, 0], wrapped[1, 0] = 0.001, 2 * math.pi - 0.001  # across North
     assert merged_tentative(wrapped[:2], np.repeat(P[None], 2, axis=0), H, conf[:2], 9.21)[1]
+
+
+def test_register_holds_the_associated_detections_not_the_estimates() -> None:
+    """TMA is fed the bearing register: the raw detections (independent, sigma known)."""
+    tr = BearingTracker(BB, "cylindrical", SIG)
+    rng = np.random.default_rng(5)
+    z = 1.0 + SIG * rng.standard_normal(12)
+    seen = [k for k in range(12) if k != 7]  # cycle 7: no detection
+    for k in range(12):
+        b = np.array([z[k]]) if k in seen else np.zeros(0)
+        tr.step(10.0 * k, b, np.full(b.size, 30.0), 0.0, own_x=float(k))
+    status, h = tr.history_of(int(tr.table.id[tr.table.active_indices()[0]]))
+    assert status == "confirmed"
+    np.testing.assert_allclose(h["t"], 10.0 * np.array(seen))
+    np.testing.assert_allclose(h["brg"], z[seen])
+    np.testing.assert_allclose(h["sbrg"], SIG)
+    np.testing.assert_allclose(h["own_x"], seen)
+    assert not np.allclose(h["brg"], tr.table.x[tr.table.active_indices()[0], 0])
