@@ -166,3 +166,21 @@ def test_split_the_lighter_of_two_far_hypotheses_into_a_tentative_track():
     # now the second heaviest is 11 deg away (d^2 > d_split^2): it becomes track 2
     assert track.tolist() == [0, 0, 1] and trk.tr.uid.tolist() == [1, 2]
     assert trk.tr.SA.tolist() == [0, 0] and trk.retro._inherits == {2: (1, 0.0)}
+
+
+def test_gate_equals_the_exact_test_of_every_pair_with_its_own_r():
+    trk = tracker(gate=3.0)
+    rng = np.random.default_rng(8)
+    xp = np.column_stack([rng.uniform(1.0, 1.2, 30), np.zeros(30), rng.uniform(8, 15, 30), np.zeros(30)])
+    Pp = np.stack([np.diag([rng.uniform(0.2, 2) * DEG**2, 1e-8, rng.uniform(1, 4), 1e-3]) for _ in range(30)])
+    z = np.column_stack([rng.uniform(0.95, 1.25, 40), rng.uniform(5, 18, 40)])
+    Rd = np.column_stack([(rng.uniform(0.3, 3.0, 40) * DEG) ** 2, np.full(40, 4.0)])
+    hi, lj, y, S = trk._gate(xp, Pp, z, Rd)
+    want = set()
+    for h in range(30):
+        for m in range(40):
+            yy = z[m] - xp[h, [0, 2]]
+            SS = Pp[h][np.ix_([0, 2], [0, 2])] + np.diag(Rd[m])
+            if yy @ np.linalg.solve(SS, yy) < 9.0:  # 000 y' S^-1 y < lambda^2
+                want.add((h, m))
+    assert set(zip(hi.tolist(), lj.tolist())) == want and len(want) > 20
