@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import logging
 from collections import Counter
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -29,7 +28,6 @@ MIN_INTERVAL_S = 0.1
 CLOSE_TIMEOUT_S = 1.0
 STATIC = files("services.view") / "static"
 CONTENT_TYPES = {".html": "text/html", ".js": "text/javascript", ".css": "text/css"}
-log = logging.getLogger("view")
 
 
 class Hub:
