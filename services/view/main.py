@@ -22,7 +22,7 @@ from typing import Any
 import zenoh
 from aiohttp import web
 
-from common.bus.transport import Inbox, open_session
+from common.bus.transport import Envelope, Inbox, open_session
 from common.cli import add_common, load_config
 from common.wire import protocol
 from common.wire.view_model import ViewModel
@@ -30,6 +30,7 @@ from services.status.main import alive, take
 from services.view.server import Hub, app
 
 ALIVE_PERIOD_S = 1.0
+LATEST_ONLY = {"gtracks", "etracks", "truth_radar", "tma", "truth_sonar"}
 KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sonar/detections/*",
         "sonar/btracks/*", "sonar/tma/*")
 log = logging.getLogger("view")
@@ -63,25 +64,36 @@ class Feed:
         self.loop.call_soon_threadsafe(self.wake.set)
 
     async def pump(self) -> None:
-        """Decode and ingest everything received, then wake the pages."""
+        """Decode and ingest what was received, then wake the pages. Of a key whose
+        latest message replaces the previous one (LATEST_ONLY) only the last received is
+        decoded; the others are counted as ``coalesced`` (a view that falls behind skips
+        them instead of lagging further)."""
         counters = self.hub.counters
         while True:
             await self.wake.wait()
             self.wake.clear()
+            batch: dict[str | int, tuple[str, Envelope]] = {}
             while (env := self.data.get(0.0)) is not None:
                 counters["in"] += 1
                 kind = protocol.kind_of(env.key, self.root)
                 if kind is None:  # KEYS name only v1 data keys
                     continue
-                try:
-                    self.hub.model.ingest(kind, protocol.decode(kind, env.payload))
-                except ValueError as e:  # DecodeError, or a base the deployment lacks
-                    counters["rejected"] += 1
-                    if counters["rejected"] == 1 or counters["rejected"] % 1000 == 0:
-                        log.error("rejected %s (%d so far): %s", env.key, counters["rejected"], e)
+                slot: str | int = env.key if kind in LATEST_ONLY else counters["in"]
+                counters["coalesced"] += slot in batch
+                batch[slot] = (kind, env)
+            for kind, env in batch.values():
+                self._ingest(kind, env)
             take(self.metrics_inbox, self.metrics)
             self.hub.model.set_metrics(self.metrics)
             self.hub.bump()
+
+    def _ingest(self, kind: str, env: Envelope) -> None:
+        try:
+            self.hub.model.ingest(kind, protocol.decode(kind, env.payload))
+        except ValueError as e:  # DecodeError, or a base the deployment lacks
+            n = self.hub.counters["rejected"] = self.hub.counters["rejected"] + 1
+            if n == 1 or n % 1000 == 0:
+                log.error("rejected %s (%d so far): %s", env.key, n, e)
 
     async def watch_alive(self) -> None:
         """The liveliness tokens every ALIVE_PERIOD_S (a killed service's row turns red)."""
