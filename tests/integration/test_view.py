@@ -218,7 +218,7 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         details = wait("the clicked track's fields", lambda: browser.find_element(By.ID, "details").text
                        if browser.find_element(By.ID, "details").get_attribute("data-id") else None, 30)
         assert details.startswith(f"track {one['id']}  confirmed"), details
-        assert "sigmas" in details and "etracks   b" in details and "cycles seen" in details
+        assert "sigmas" in details and "etracks   b" in details and "updates drawn" in details
 
         now = stats(port)
         assert now["pages"] == 2  # the browser and the stalled page, which blocked nothing:

@@ -196,7 +196,7 @@ function details(k) {
     `2-sigma   ${k.ell[0].toFixed(0)} x ${k.ell[1].toFixed(0)} m`,
     `etracks   ${k.et.map((e) => `${e[0]}:${e[1]}`).join(" ") || "none"}`,
     `score     ${k.score}`,
-    `history   ${k.n} cycles seen, trail ${k.trail.length} points`,
+    `history   ${k.n} updates drawn, trail ${k.trail.length} points`,
   ].join("\n");
 }
 
