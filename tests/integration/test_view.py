@@ -244,12 +244,18 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         counters = stats(port)
         assert counters.get("rejected", 0) == 0
         assert counters["in"] >= len(d.of("radar/gtracks"))  # and etracks, truth, sonar
+        d.session.put(f"{ROOT}/sim/truth/radar", b"\xc1 not msgpack")
+        d.session.put(f"{ROOT}/radar/etracks/b9", protocol.encode(
+            {"v": protocol.VERSION, "t": 1.0, "base": "b9", "tracks": []}))  # no such base
+        wait("two rejected inputs counted", lambda: stats(port).get("rejected") == 2, 30)
         busy = d.start("view-busy", "view", "--config", str(TWO_TARGETS), "--port", str(port))
         assert busy.wait(60) == 2  # the port is the first view's
         assert view.alive()
         view.proc.send_signal(signal.SIGTERM)  # a clean stop, the browser still connected
         assert view.proc.wait(60) == 0
     assert f"pfusion view: cannot listen on 127.0.0.1:{port}" in (tmp_path / "view-busy.log").read_text()
+    assert f"rejected {ROOT}/sim/truth/radar (1 so far): <payload>: not msgpack" in (
+        tmp_path / "view.log").read_text()
 
 
 @pytest.mark.slow
