@@ -106,11 +106,12 @@ def grants(cfg: Config) -> dict[str, Grant]:
         bt.serve = [f"sonar/history/{a.id}/*"]
         tma = g[f"tma-{a.id}"] = _service(
             "tma", a.id, [f"sonar/tma/{a.id}"],
-            [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}"])
+            [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}",
+             f"sonar/tma/support/{a.id}"])
         tma.query = [f"sonar/history/{a.id}/*"]
     g[OPERATOR] = Grant(subscribe=["**"], query=["**"], tokens=list(OPERATOR_TOKENS),
                         watch_alive=True)
-    g[SUPERVISOR] = Grant(publish=["sonar/tma/bounds/*"])
+    g[SUPERVISOR] = Grant(publish=["sonar/tma/bounds/*", "sonar/tma/support/*"])
     g[SIMULATOR] = Grant(publish=["radar/plots/**", "sonar/detections/**", "sim/**"],
                          tokens=["alive/simulate/*"], watch_alive=True)
     return g

@@ -141,6 +141,10 @@ RANGES: dict[str, dict[str, Range]] = {
         "roc_threshold": positive("fraction"), "tma_tol": positive("m"), "max_iter": count(1),
         "manoeuvre_p_false": PROB_OPEN,
     },
+    "sonar.tma.support": {
+        "course": Range("rad", 0.0, 2.0 * math.pi), "course_sigma": non_negative("rad"),
+        "speed": non_negative("m/s"), "speed_sigma": non_negative("m/s"),
+    },
     "sonar.tma.bounds": _BOUNDS,
     "sonar.tma.bounds.*": _BOUNDS,
 }

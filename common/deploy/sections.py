@@ -17,7 +17,7 @@ from common.sonar.ctma import CtmaConfig
 from common.radar.elementary import ElementaryParams, RadarCrossingParams
 from common.radar.global_fusion import FusionParams
 from common.radar.plot_fusion import PlotterParams
-from common.sonar.tma_manager import BoundsParams, TmaParams
+from common.sonar.tma_manager import BoundsParams, SupportParams, TmaParams
 
 SECTIONS: dict[str, type] = {
     "radar.plotter": PlotterParams,
@@ -30,6 +30,7 @@ SECTIONS: dict[str, type] = {
     "sonar.crossing": CrossingParams,
     "sonar.tma": TmaParams,
     "sonar.tma.ctma": CtmaConfig,
+    "sonar.tma.support": SupportParams,
     "sonar.tma.bounds": BoundsParams,
     "sonar.tma.bounds.*": BoundsParams,
 }

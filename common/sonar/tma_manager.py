@@ -27,6 +27,7 @@ import numpy as np
 from common.core.rejection import Rejected
 from common.sonar.ctma import CtmaConfig, CycleOutput, TmaTracker
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
+from common.sonar.tma import Support
 
 VERSION = 1
 
@@ -45,6 +46,43 @@ class TmaParams:
     sample_dt: float = 0.0
     own_keep: int = 64
     max_pending: int = 8
+
+
+@dataclass(frozen=True)
+class SupportParams:
+    """``[sonar.tma.support]``: course and speed support values of 002 (claims 3-10).
+
+    Values from another source, given to every track of the array from its first cycle
+    (at that time). A range is only given at run time (``sonar/tma/support/<array>``): it
+    belongs to one track, one time and one observing position.
+
+    course, course_sigma: target course (rad, clockwise from North) and its sigma (rad);
+        course_sigma = 0: no course support.
+    speed, speed_sigma: target speed (m/s) and its sigma (m/s); speed_sigma = 0: none.
+    """
+
+    course: float = 0.0
+    course_sigma: float = 0.0
+    speed: float = 0.0
+    speed_sigma: float = 0.0
+
+    def supports(self, t: float) -> list[Support]:
+        """The configured support values at time t."""
+        out = []
+        if self.course_sigma > 0:
+            out.append(Support("course", self.course, self.course_sigma, t))
+        if self.speed_sigma > 0:
+            out.append(Support("speed", self.speed, self.speed_sigma, t))
+        return out
+
+
+def make_support(msg: Mapping[str, Any]) -> Support:
+    """A :class:`Support` from a decoded support message; a range needs obs_x, obs_y."""
+    obs = (msg.get("obs_x"), msg.get("obs_y"))
+    if msg["kind"] == "range" and None in obs:
+        raise Rejected("bad_support", "a range support needs obs_x and obs_y")
+    xy = (float(obs[0]), float(obs[1])) if None not in obs else (0.0, 0.0)
+    return Support(msg["kind"], float(msg["value"]), float(msg["sigma"]), float(msg["t"]), xy)
 
 
 BOUNDS_FIELDS = ("r_min", "r_max", "course_min", "course_max", "speed_min", "speed_max")
@@ -153,9 +191,10 @@ class TmaManager:
     """
 
     def __init__(self, array: str, params: TmaParams = TmaParams(), bounds: Bounds = MINIMAL_BOUNDS,
-                 config: CtmaConfig = CtmaConfig()) -> None:
+                 config: CtmaConfig = CtmaConfig(), support: SupportParams = SupportParams()) -> None:
         self.array = array
         self.params = params
+        self.support = support
         self.bounds = bounds
         self.config = config
         self.tracks: dict[int, TrackTma] = {}
@@ -224,12 +263,21 @@ class TmaManager:
             trk = self.tracks.get(tid)
             if trk is None:
                 trk = self.tracks[tid] = TrackTma(TmaTracker(self.bounds, self.config))
+                trk.tracker.support.extend(self.support.supports(t))  # 002 claims 3-10
             h = histories.get(tid)
             if h is not None and h["status"] == "confirmed" and h["id"] == tid:
                 rows = np.column_stack((h["t_hist"], h["brg"], h["sbrg"], h["own_x"], h["own_y"]))
                 trk.add(rows[np.argsort(rows[:, 0], kind="stable")], self.params.sample_dt)
             self.cycles += trk.cycle(t, self.params.cycle_dt)
         return self.message(t)
+
+    def add_support(self, msg: Mapping[str, Any]) -> None:
+        """Apply a decoded support message (002 claims 3-10) to its track: the value
+        enters every later TMA/CTMA solve of the track (unknown track: Rejected)."""
+        trk = self.tracks.get(msg["track"])
+        if trk is None:
+            raise Rejected("unknown_track", f"no TMA for track {msg['track']}")
+        trk.tracker.support.append(make_support(msg))
 
     def set_bounds(self, msg: Mapping[str, Any]) -> list[int]:
         """Apply a decoded bounds message; returns the tracks changed.

@@ -145,6 +145,12 @@ TMA_BOUNDS = {
     "course_min": Field("float", angle=True), "course_max": Field("float", angle=True),
     "speed_min": Field("float", nonneg=True), "speed_max": Field("float", positive=True),
 }
+TMA_SUPPORT = {
+    "v": V, "t": T, "track": Field("int", nonneg=True),
+    "kind": Field("str", choices=("range", "course", "speed")), "value": Field("float"),
+    "sigma": Field("float", positive=True),
+    "obs_x": Field("float", optional=True), "obs_y": Field("float", optional=True),
+}
 SIM_STATUS = {"v": V, "t": T, "state": Field("str", choices=("running", "done")),
               "scans": Field("int", nonneg=True), "published": Field("int", nonneg=True)}
 
@@ -152,7 +158,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "plots": PLOTS, "fused": FUSED, "etracks": ETRACKS, "gtracks": GTRACKS,
     "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
     "sim_status": SIM_STATUS, "btracks": BTRACKS, "history": HISTORY,
-    "tma": TMA, "tma_bounds": TMA_BOUNDS,
+    "tma": TMA, "tma_bounds": TMA_BOUNDS, "tma_support": TMA_SUPPORT,
 }
 
 # Key layout under the root -> message kind ("*" = one chunk: a base, channel, array, id).
@@ -166,6 +172,7 @@ KEY_KINDS: tuple[tuple[tuple[str, ...], str], ...] = (
     (("sonar", "history", "*", "*"), "history"),
     (("sonar", "tma", "*"), "tma"),
     (("sonar", "tma", "bounds", "*"), "tma_bounds"),
+    (("sonar", "tma", "support", "*"), "tma_support"),
     (("sim", "truth", "radar"), "truth_radar"),
     (("sim", "truth", "sonar"), "truth_sonar"),
     (("sim", "status"), "sim_status"),

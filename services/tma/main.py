@@ -2,10 +2,12 @@
 track of one array (TMA of seed 002, constrained TMA with error handling of seed 003).
 
 Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (confirmed tracks)
-and root/sonar/tma/bounds/A (bounds at run time); fetches root/sonar/history/A/<id> for
+root/sonar/tma/bounds/A (bounds at run time) and root/sonar/tma/support/A (002 support
+values at run time); fetches root/sonar/history/A/<id> for
 a newly confirmed track and whenever its TMA cycle is due (the associated detections); publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
 
-Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tma.bounds]
+Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tma.support]
+(SupportParams), [sonar.tma.bounds]
 (BoundsParams, default of every array) overridden key by key by [sonar.tma.bounds.<A>].
 """
 
@@ -22,10 +24,10 @@ from common.sonar.ctma import CtmaConfig
 from common.sonar.ctma_bounds import Bounds
 from common.bus.service import Service
 from common.core.rejection import Rejected
-from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, TmaManager, TmaParams, make_bounds
+from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, SupportParams, TmaManager, TmaParams, make_bounds
 
 HISTORY_TIMEOUT_S = 2.0
-SUBTABLES = ("ctma", "bounds")
+SUBTABLES = ("ctma", "bounds", "support")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -49,8 +51,8 @@ def _leaf_section(cfg: Config, dotted: str, table: dict[str, Any], cls: type) ->
     return section(replace(cfg, doc=doc), dotted, cls)
 
 
-def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds]:
-    """The TMA parameters, core config and initial bounds of ``array``."""
+def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds, SupportParams]:
+    """The TMA parameters, core config, initial bounds and support values of ``array``."""
     tma = _table(cfg.doc, "sonar.tma")
     extra = sorted(k for k, v in tma.items() if isinstance(v, dict) and k not in SUBTABLES)
     if extra:
@@ -67,15 +69,15 @@ def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds]:
         b = make_bounds(_leaf_section(cfg, f"sonar.tma.bounds.{array}", merged, BoundsParams))
     except Rejected as e:
         raise ConfigError(f"sonar.tma.bounds.{array}", e.detail) from None
-    return params, core, b
+    return params, core, b, section(cfg, "sonar.tma.support", SupportParams)
 
 
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     arr = cfg.array(args.array)
-    params, core, bounds = tma_config(cfg, arr.id)
+    params, core, bounds, support = tma_config(cfg, arr.id)
     svc = Service("tma", arr.id, cfg)
-    mgr = TmaManager(arr.id, params, bounds, core)
+    mgr = TmaManager(arr.id, params, bounds, core, support)
 
     def history(tid: int) -> dict[str, Any] | None:
         """The bearing register of a newly confirmed track (None: not served in time)."""
@@ -115,7 +117,13 @@ def main(args: argparse.Namespace) -> int:
         ids.extend(mgr.set_bounds(msg))
         svc.log.info("bounds %s for tracks %s", [msg[k] for k in BOUNDS_FIELDS], ids)
 
+    def on_support(key: str, payload: bytes) -> None:
+        msg = protocol.decode("tma_support", payload)
+        mgr.add_support(msg)
+        svc.log.info("support %s %s +- %s for track %s", msg["kind"], msg["value"], msg["sigma"], msg["track"])
+
     svc.subscribe(f"sonar/detections/{arr.id}", on_det)
     svc.subscribe(f"sonar/btracks/{arr.id}", on_btracks)
     svc.subscribe(f"sonar/tma/bounds/{arr.id}", on_bounds)
+    svc.subscribe(f"sonar/tma/support/{arr.id}", on_support)
     return svc.run()

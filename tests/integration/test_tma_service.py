@@ -26,7 +26,7 @@ from common.wire import protocol
 from common.deploy.config import ConfigError, parse
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.core.rejection import Rejected
-from common.sonar.tma_manager import TmaManager, TmaParams, make_bounds, thin
+from common.sonar.tma_manager import SupportParams, TmaManager, TmaParams, make_bounds, thin
 from tests.harness import ROOT, SCENARIOS, Deployment
 from services.tma.main import tma_config
 
@@ -224,6 +224,63 @@ def test_bounds_messages_apply_to_all_or_one_track():
         mgr.set_bounds(_bounds_msg(track=9))
 
 
+def _support_msg(**kw: Any) -> dict[str, Any]:
+    msg = {"v": 1, "t": 300.0, "track": 1, "kind": "range", "value": 1000.0, "sigma": 50.0,
+           "obs_x": 0.0, "obs_y": 0.0}
+    msg.update(kw)
+    return msg
+
+
+def _pos_sigma(s: dict[str, Any]) -> float:
+    P = np.asarray(s["P"]).reshape(4, 4)
+    return math.sqrt(P[0, 0] + P[1, 1])
+
+
+def test_a_range_support_tightens_the_solution():
+    """002 claims 3-10: a range from another source enters the solve of its track only."""
+    times = np.arange(0.0, 601.0, 20.0)  # before the own-ship turn: range barely observable
+    runs = {}
+    for with_support in (False, True):
+        mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
+        feed(mgr, 600.0, [btrack(1, 600.0), btrack(2, 600.0)], {1: history(1, times), 2: history(2, times)})
+        if with_support:
+            ox, oy = own_at(600.0)
+            x, y = TARGET[:2] + TARGET[2:] * 600.0
+            mgr.add_support(_support_msg(t=600.0, value=math.hypot(x - ox, y - oy), obs_x=ox, obs_y=oy))
+        runs[with_support] = feed(mgr, 620.0, [btrack(1, 620.0), btrack(2, 620.0)])["solutions"]
+    (a1, a2), (b1, b2) = runs[False], runs[True]
+    assert _pos_sigma(b1) < 0.3 * _pos_sigma(a1)
+    assert _pos_sigma(b2) == pytest.approx(_pos_sigma(a2))  # the other track is untouched
+    x, y = TARGET[:2] + TARGET[2:] * 620.0
+    assert math.hypot(b1["x"] - x, b1["y"] - y) < 3 * _pos_sigma(b1)
+
+
+def test_configured_course_and_speed_supports_reach_every_new_track():
+    sup = SupportParams(course=1.0, course_sigma=0.1, speed=3.0, speed_sigma=0.5)
+    mgr = TmaManager("a1", TmaParams(cycle_dt=0.0), support=sup)
+    feed(mgr, 0.0, [btrack(1, 0.0)])
+    assert [(s.kind, s.value, s.sigma, s.t) for s in mgr.tracks[1].tracker.support] == [
+        ("course", 1.0, 0.1, 0.0), ("speed", 3.0, 0.5, 0.0)]
+
+
+def test_support_messages_are_checked():
+    mgr = TmaManager("a1")
+    with pytest.raises(Rejected, match="unknown_track"):
+        mgr.add_support(_support_msg(track=9))
+    feed(mgr, 0.0, [btrack(1, 0.0)])
+    msg = _support_msg()
+    del msg["obs_x"]
+    with pytest.raises(Rejected, match="bad_support"):
+        mgr.add_support(msg)
+    mgr.add_support(_support_msg(kind="speed", value=2.0, sigma=0.2, obs_x=None, obs_y=None))
+    with pytest.raises(protocol.DecodeError) as e:
+        protocol.decode("tma_support", msgpack.packb(_support_msg(kind="depth")))
+    assert e.value.field == "kind"
+    with pytest.raises(protocol.DecodeError) as e:
+        protocol.decode("tma_support", msgpack.packb(_support_msg(sigma=0.0)))
+    assert e.value.field == "sigma"
+
+
 # ---------------------------------------------------------------- (b) bounds message, config
 
 @pytest.mark.parametrize("change, field", [
@@ -268,12 +325,12 @@ def _cfg(tma: dict[str, Any]) -> Any:
 
 
 def test_config_defaults_and_per_array_bounds():
-    params, core, b = tma_config(parse(DOC), "a1")
-    assert params == TmaParams() and b == MINIMAL_BOUNDS and core.q1 == 2.0
+    params, core, b, sup = tma_config(parse(DOC), "a1")
+    assert params == TmaParams() and b == MINIMAL_BOUNDS and core.q1 == 2.0 and sup.supports(0.0) == []
     cfg = _cfg({"cycle_dt": 120.0, "ctma": {"q1": 3.0},
                 "bounds": {"r_max": 30000.0, "speed_max": 10.0, "a2": {"r_min": 2000.0, "speed_max": 6.0}}})
-    params, core, b1 = tma_config(cfg, "a1")
-    _, _, b2 = tma_config(cfg, "a2")
+    params, core, b1, _ = tma_config(cfg, "a1")
+    _, _, b2, _ = tma_config(cfg, "a2")
     assert params.cycle_dt == 120.0 and core.q1 == 3.0
     assert (b1.r_min, b1.r_max, b1.v_max) == (MINIMAL_BOUNDS.r_min, 30000.0, 10.0)
     assert (b2.r_min, b2.r_max, b2.v_max) == (2000.0, 30000.0, 6.0)
@@ -335,6 +392,13 @@ def test_tma_service_on_sonar_tma(tmp_path: Path) -> None:
         n_before = len(d.of("sonar/tma/a1"))
         new = dict(zip(("r_min", "r_max", "course_min", "course_max", "speed_min", "speed_max"), NEW_BOUNDS))
         d.session.put(bounds_key, protocol.encode(_bounds_msg(t=1800.0, **new)))
+        # 002 support: the true range (10 m sigma) of the first solution's target
+        sup = d.of("sonar/tma/a1")[-1]["solutions"][0]
+        at = next(m for m in d.of("sim/truth/sonar") if m["t"] == sup["t"])
+        j = list(at["id"]).index(_errors(sup, at)[0])
+        r_true = math.hypot(at["x"][j] - at["own"]["x"], at["y"][j] - at["own"]["y"])
+        d.session.put(f"{ROOT}/sonar/tma/support/a1", protocol.encode(_support_msg(
+            t=sup["t"], track=sup["track"], value=r_true, sigma=10.0, obs_x=at["own"]["x"], obs_y=at["own"]["y"])))
         d.wait_for(lambda: any(m["t"] == T_END for m in d.of("metrics/tma/a1")), 120)
         tma = d.of("sonar/tma/a1")
         truth = {m["t"]: m for m in d.of("sim/truth/sonar")}
@@ -354,3 +418,12 @@ def test_tma_service_on_sonar_tma(tmp_path: Path) -> None:
     before = [s["bounds"] for m in tma[:n_before] for s in m["solutions"]]
     assert before and all(b[0] == MINIMAL_BOUNDS.r_min for b in before)
     assert all(np.allclose(s["bounds"], NEW_BOUNDS) for s in tma[-1]["solutions"])
+    # the range support (10 m) tightens its track's solution at once (002 claims 3-10): from
+    # 86 to 27 m in the cycle after it on seed 1, while the other tracks stayed at 1011 and 501 m
+    series = [(m["t"], _pos_sigma(s), s) for m in tma[n_before - 1:n_before + 40]
+              for s in m["solutions"] if s["track"] == sup["track"]]
+    drop = [i for i in range(1, len(series)) if series[i][1] < 0.5 * series[i - 1][1]]
+    assert drop, f"no solution of track {sup['track']} tightened after the support: {series}"
+    t_after, _, s_after = series[drop[0]]
+    e = _errors(s_after, truth[t_after])
+    assert e is not None and e[1] < 0.01, e
