@@ -10,7 +10,8 @@ waits for a slow page is bounded by the number of topics, never by the message r
 
 Everything kept is bounded: trails (``TRAIL`` points a track, one per ``TRAIL_DT`` s of
 message time), waterfall rows (``ROWS`` per array), bearing-track series (the rows'
-time window). Tracks that leave the global picture drop their trail.
+time window), sonar arrays (``MAX_ARRAYS``; elementary tracks only of the file's bases).
+Tracks that leave the global picture drop their trail.
 
 Shapes drawn by the page, in the deployment's East-North frame (metres):
 - 2-sigma ellipse of a 2x2 position covariance C: semi-axes 2 sqrt(lambda_1,2) of the
@@ -38,6 +39,7 @@ from common.deploy.config import Config
 TRAIL = 30
 TRAIL_DT = 1.0
 ROWS = 240
+MAX_ARRAYS = 16
 ARC_SIGMAS = 2.0
 ARC_POINTS = 17
 ELLIPSE_SIGMAS = 2.0
@@ -188,6 +190,8 @@ class ViewModel:
     def _array(self, array: str) -> _Array:
         a = self._arrays.get(array)
         if a is None:
+            if len(self._arrays) >= MAX_ARRAYS:
+                raise ValueError(f"array '{array}': the view already shows {MAX_ARRAYS} arrays")
             a = self._arrays[array] = _Array()
         return a
 
@@ -228,6 +232,7 @@ class ViewModel:
         })
 
     def _on_truth_sonar(self, msg: dict[str, Any]) -> None:
+        self._array(msg["array"])
         self._topic(f"truth_sonar/{msg['array']}").set({
             "t": float(msg["t"]), "id": msg["id"].tolist(), "x": _round(msg["x"]),
             "y": _round(msg["y"]), "own": [round(msg["own"]["x"], 1), round(msg["own"]["y"], 1)]})

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from common.deploy.config import ConfigError, load
 from common.wire import protocol
-from common.wire.view_model import ROWS, TRAIL, ViewModel, bistatic_arc, ellipses
+from common.wire.view_model import MAX_ARRAYS, ROWS, TRAIL, ViewModel, bistatic_arc, ellipses
 
 REPO = Path(__file__).resolve().parents[2]
 CFG = load(REPO / "scenarios" / "two_targets.toml")
@@ -132,6 +132,10 @@ def test_waterfall_and_bearing_series_are_bounded_to_the_window() -> None:
     assert len(w["rows"]) == ROWS and w["rows"][-1] == [20.0 * (ROWS + 49), [28.6, 57.3]]
     assert set(w["tracks"]) == {"2"}  # track 1 ended before the window
     assert len(w["tracks"]["2"]) == ROWS and w["tracks"]["2"][0][1:] == [28.65, 1]
+    for k in range(MAX_ARRAYS - 1):  # a1 and 15 more; the 17th is refused
+        m.ingest("btracks", wire("btracks", {"t": 0.0, "array": f"x{k}", "tracks": []}))
+    with pytest.raises(ValueError, match="16 arrays"):
+        m.ingest("btracks", wire("btracks", {"t": 0.0, "array": "one-too-many", "tracks": []}))
 
 
 def test_tma_solution_has_its_ellipse_and_course() -> None:
