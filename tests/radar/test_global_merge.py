@@ -1,0 +1,61 @@
+"""common.radar.global_merge: duplicate global tracks (disjoint bases, positions within
+the gate) are paired closest first; tracks sharing a base never are."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from common.core.gating import chi2_gate
+from common.radar.global_merge import duplicate_pairs
+
+GAMMA = chi2_gate(0.999, 3)
+
+
+def _has(*sets: tuple[int, ...]) -> np.ndarray:
+    h = np.zeros((len(sets), 4), dtype=bool)
+    for k, s in enumerate(sets):
+        h[k, list(s)] = True
+    return h
+
+
+def test_disjoint_close_tracks_pair_and_shared_bases_do_not() -> None:
+    pos = np.array([[0.0, 0.0, 5000.0], [300.0, 0.0, 5000.0], [0.0, 200.0, 5000.0],
+                    [50e3, 0.0, 5000.0]])
+    cov = np.tile(np.eye(3) * 500.0**2, (4, 1, 1))
+    i, j = duplicate_pairs(pos, cov, _has((0, 1), (2, 3), (0, 2, 3), (2, 3)), GAMMA)
+    assert list(zip(i, j)) == [(0, 1)]  # 2 shares bases with 0 and 1; 3 is 50 km away
+    i, j = duplicate_pairs(pos, cov, _has((0, 1), (0, 3), (0, 2, 3), (1,)), GAMMA)
+    assert i.size == 0  # every close pair shares base 0
+
+
+def test_gate_uses_both_covariances_and_closest_pair_wins() -> None:
+    pos = np.array([[0.0, 0.0, 5000.0], [3000.0, 0.0, 5000.0], [200.0, 0.0, 5000.0]])
+    tight = np.tile(np.eye(3) * 200.0**2, (3, 1, 1))
+    assert duplicate_pairs(pos[:2], tight[:2], _has((0, 1), (2, 3)), GAMMA)[0].size == 0
+    wide = tight.copy()
+    wide[1] = np.eye(3) * 2500.0**2  # an uncertain new track: 3 km is within its gate
+    i, j = duplicate_pairs(pos[:2], wide[:2], _has((0, 1), (2, 3)), GAMMA)
+    assert list(zip(i, j)) == [(0, 1)]
+    # track 0 could merge with 1 (d^2 1.4) or 2 (d^2 0.5): 2 wins, 1 then has no partner
+    i, j = duplicate_pairs(pos, wide, _has((0, 1), (2, 3), (2, 3)), GAMMA)
+    assert list(zip(i, j)) == [(0, 2)]
+
+
+def test_empty_tracks_and_random_superset() -> None:
+    rng = np.random.default_rng(1)
+    n = 200
+    pos = rng.uniform(-20e3, 20e3, (n, 3))
+    A = rng.standard_normal((n, 3, 3)) * 800.0
+    cov = A @ np.swapaxes(A, 1, 2) + np.eye(3)
+    has = rng.uniform(size=(n, 4)) < 0.4
+    i, j = duplicate_pairs(pos, cov, has, GAMMA)
+    # brute force over all pairs: the KD-tree search radius misses none
+    a, b = np.triu_indices(n, 1)
+    d = pos[a] - pos[b]
+    d2 = np.einsum("pi,pi->p", d, np.linalg.solve(cov[a] + cov[b], d[..., None])[..., 0])
+    ok = (d2 <= GAMMA) & has[a].any(1) & has[b].any(1) & ~(has[a] & has[b]).any(1)
+    paired = set(i.tolist()) | set(j.tolist())
+    assert all(a[p] in paired or b[p] in paired for p in np.flatnonzero(ok))  # maximal
+    assert {(x, y) for x, y in zip(i, j)} <= set(zip(a[ok].tolist(), b[ok].tolist()))
+    assert len(paired) == 2 * i.size
+    assert duplicate_pairs(pos[:1], cov[:1], has[:1], GAMMA)[0].size == 0
