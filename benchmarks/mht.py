@@ -8,7 +8,10 @@ Cases: the six crossing scenes of tests/integration/test_crossing_integration.py
 seed 004 crossing management on) with 3 false detections per cycle instead of 1, and a
 close-approach scene (`close_approach` below: a 15 kn target passing 1 km from a 6 kn
 own ship, bearing rate up to 26 deg/min, 1 deg sigma, 3 false detections per cycle).
-Each case: RUNS seeded runs (seeds 1..RUNS) of the simulator (common.sim), fed cycle by
+Extra case, only with --case sonar_hold5: scenarios/sonar_hold5.toml (5 contacts, one
+slow crossing pair, one contact crossing North, own-ship turn, 3 false detections per
+cycle; written by the single-hypothesis work of issue 13, not tuned here). Each case:
+RUNS seeded runs (seeds 1..RUNS) of the simulator (common.sim), fed cycle by
 cycle to both trackers. MHT parameters: MhtParams defaults with rho_F = the clutter
 density per rad and per 10 dB of level (clutter / (2 pi 10)).
 
@@ -62,6 +65,7 @@ EVAL = EvalParams(sigma=(DEG,), gate=5.0, resolved=6.0, near=1.0, far=8.0, lost_
                   angle_idx=(0,))
 CLUTTER = 3.0
 CROSSING = [f"sonar_cross_{r}dpm_{a}" for r in (1, 2, 4) for a in ("eq", "uneq")]
+EXTRA = ["sonar_hold5"]  # run with --case sonar_hold5 (see the module docstring)
 
 CLOSE_APPROACH = """
 [zenoh]
@@ -253,7 +257,8 @@ def main() -> int:
     ap.add_argument("--case", action="append", default=[], help="case name (repeatable)")
     ap.add_argument("--no-scale", action="store_true", help="skip the 10/50/200 target timing")
     args = ap.parse_args()
-    cases = [c for c in CROSSING + ["close_approach"] if not args.case or c in args.case]
+    every = CROSSING + ["close_approach"] + EXTRA
+    cases = [c for c in every if c in args.case] if args.case else every[: -len(EXTRA)]
     failed: list[str] = []
     print(f"{'case':22} {'mode':4} {'swaps':>9} {'breaks':>9} {'false/100':>9} {'RMSE':>6} "
           f"{'retro':>6} {'filt':>6} {'ms':>6} {'hyp max':>7}")

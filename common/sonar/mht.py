@@ -41,7 +41,12 @@ Deviations (stated):
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
   implemented as track i continuing with omega's hypotheses (its number and register
   are kept; its own hypotheses, which followed the other target, are dropped) and
-  omega removed. A conflict also ends when P_u of the pair's main hypotheses falls
+  omega removed. The seed re-links only when omega is within d_Auf of a hypothesis of
+  i or j; when i and j have coalesced on one target (their main hypotheses took the same
+  measurement or are closer than d_merge: both followed one target out of a slow
+  crossing), omega, the lost
+  target's new track, is far from both, so it is re-linked when within relink_deg of
+  them, by the seed's rate-sign / level rule. A conflict also ends when P_u of the pair's main hypotheses falls
   below 1e-3 (the seed ends it by the re-link only).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
   of the main hypothesis of a confirmed or an older track does not pass the test this
@@ -110,6 +115,8 @@ class MhtParams:
         the track merge (deg).
     res_deg: resolution of P_u and sigma of the fictitious "separation = 0" (deg).
     d_auf: d_Auf of the re-link at the end of a resolution conflict.
+    relink_deg: a new confirmed track within this bearing of a coalesced conflicting
+        pair is re-linked to one of them (deg).
     n_retro: retrodiction depth (cycles).
     max_hyp_track, max_hyp_cycle: caps on hypotheses per track and per cycle.
     """
@@ -131,6 +138,7 @@ class MhtParams:
     merge_sigma_max_deg: float = 3.0
     res_deg: float = 1.5
     d_auf: float = 3.0
+    relink_deg: float = 10.0
     n_retro: int = 10
     max_hyp_track: int = 16
     max_hyp_cycle: int = 20000

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from common.core.angles import wrap_pi
 from common.sonar.mht_conflict import interpret, relink_choice, unresolved_probability
 from common.sonar.mht_hypotheses import heaviest, pair_distance2
 
@@ -194,7 +195,9 @@ def relink(trk: "MhtTracker", newly: np.ndarray) -> np.ndarray:
     """000 end of a resolution conflict: a track omega confirmed this cycle, younger
     than the conflict of (i, j), whose main hypothesis is within d_Auf of a hypothesis
     of i or j is linked to that track's past (by the bearing-rate sign, then the level
-    from before the conflict, when near both). Returns the mask of tracks to delete."""
+    from before the conflict, when near both; also when i and j have coalesced, i.e.
+    their main hypotheses took the same measurement or are closer than d_merge, and
+    omega is within relink_deg of them). Returns the mask of tracks to delete."""
     tr, mp = trk.tr, trk.mp
     drop = np.zeros(tr.size, dtype=bool)
     if newly.size == 0:
@@ -211,6 +214,13 @@ def relink(trk: "MhtTracker", newly: np.ndarray) -> np.ndarray:
                 d2 = pair_distance2(np.repeat(trk.hx[mw][None], h.size, 0),
                                     np.repeat(trk.hP[mw][None], h.size, 0), trk.hx[h], trk.hP[h])
                 near.append(bool((d2 < mp.d_auf**2).any()))  # 000 d^2 < d_Auf^2
+            mi, mj = int(main[i]), int(main[j])
+            if not any(near) and mi >= 0 and mj >= 0:  # coalesced pair (deviation, common.sonar.mht)
+                d2 = pair_distance2(trk.hx[[mi]], trk.hP[[mi]], trk.hx[[mj]], trk.hP[[mj]])[0]
+                same = trk.hmeas[mi] >= 0 and trk.hmeas[mi] == trk.hmeas[mj]
+                off = abs(float(wrap_pi(trk.hx[mw, 0] - trk.hx[mi, 0])))
+                if (same or d2 < mp.d_merge**2) and off < math.radians(mp.relink_deg):
+                    near = [True, True]
             if not any(near):
                 continue
             if all(near):
