@@ -184,3 +184,21 @@ def test_gate_equals_the_exact_test_of_every_pair_with_its_own_r():
             if yy @ np.linalg.solve(SS, yy) < 9.0:  # 000 y' S^-1 y < lambda^2
                 want.add((h, m))
     assert set(zip(hi.tolist(), lj.tolist())) == want and len(want) > 20
+
+
+def test_relink_of_a_new_track_to_a_coalesced_conflicting_pair_by_rate_sign():
+    from common.sonar.mht_tracks import relink
+
+    trk = tracker()
+    trk._open(np.array([[1.0, 12.0], [1.0, 12.0], [1.0 + 4 * DEG, 12.0]]), np.full((3, 2), [DEG**2, 4.0]))
+    tr = trk.tr
+    tr.SA[:] = 1
+    tr.IN[:2] = [tr.uid[1], tr.uid[0]]
+    tr.k_auf[:2], tr.born[2] = 5, 9
+    tr.pre_rate[:2] = [-1e-4, 2e-4]  # before the conflict: track 1 falling, track 2 rising
+    trk.hx[2, 1] = 1.5e-4  # omega rises
+    trk.hmeas = np.array([4, 4, 7])  # the pair's main hypotheses took one measurement
+    drop = relink(trk, np.array([2]))
+    # omega (11 sigma from both, beyond d_Auf) continues track 2, whose rate sign it has
+    assert drop.tolist() == [False, False, True]
+    assert trk.ht.tolist() == [0, 2, 1] and (tr.IN[:2] == -1).all()
