@@ -311,9 +311,10 @@ class BearingTracker:
         detS = np.linalg.det(S)
         ok = gate(d2, gate_value(p.p_d, p.p_fa, self.beam, detS, m))  # 000 gate G
         ti, dj, y, d2, detS = ti[ok], dj[ok], y[ok], d2[ok], detS[ok]
-        gated[dj[self.table.status[idx[ti]] == Status.CONFIRMED]] = True
+        conf = self.table.status[idx[ti]] == Status.CONFIRMED
+        gated[dj[conf]] = True
         cost = np.full((N, M), np.inf)
-        cost[ti, dj] = d2
+        cost[ti, dj] = np.where(conf | ~gated[dj], d2, np.inf)  # confirmed tracks first
         pair = np.full((N, M), -1, dtype=np.intp)
         pair[ti, dj] = np.arange(ti.size)
         rows, cols = gnn(cost)  # 000 GNN on the squared statistical distances
