@@ -21,7 +21,6 @@ import argparse
 import copy
 import json
 import math
-import sys
 import tempfile
 import time
 import tomllib
@@ -31,6 +30,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from common.bus.local_run import Deployment
 from common.radar.bistatic import azimuth, bistatic_range
 from common.deploy.config import load
 from common.evaluation.crossing_eval import EvalParams, Frame, Summary, score_run, summarise
@@ -139,9 +139,6 @@ def frames_of(case: Case, cfg_path: Path, sensor: str, truth: list[dict[str, Any
 
 def run_case(case: Case, runs: int, workdir: Path, seed: int = 1) -> dict[str, Summary]:
     """Publish `runs` seeded runs through the pipeline; Summary per setting."""
-    sys.path.insert(0, str(REPO))  # the repository root, for tests.harness
-    from tests.harness import Deployment
-
     on, off, off_id = deployments(case, workdir)
     scn = load_scenario(tomllib.loads(on.read_text()))
     period = min(s.scan_period for s in (scn.radar, scn.sonar) if s is not None)

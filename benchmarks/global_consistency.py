@@ -25,7 +25,9 @@ from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from common.wire.radar_chain import RadarChain
 from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario
-from services.evaluate.main import base_information, truth_state
+from common.evaluation.pcrlb import base_information
+from common.sim.scenario import radar_scene
+from common.wire.sim_messages import truth_state
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 SETTLE = 30.0
@@ -61,7 +63,7 @@ def study(name: str, runs: int) -> None:
     print(f"{name}: {runs} runs")
     for seed in range(1, runs + 1):
         ev = one_run(path, seed)
-        scores = score_targets(ev, tx, rx, base_information(cfg), p.q, p.q_z, P0, SETTLE)
+        scores = score_targets(ev, tx, rx, base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, P0, SETTLE)
         after = {tid: rows[:, :2] for tid, rows in ev.after(SETTLE).items()}
         for tid, rows in after.items():
             per_target.setdefault(tid, []).append(rows)

@@ -17,13 +17,13 @@ Run: .venv/bin/python benchmarks/global_fusion.py [--no-chain]
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from common.bus.local_run import Deployment
 from common.radar.bistatic import POS, project
 from common.deploy.config import load, section
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
@@ -71,9 +71,6 @@ def core_benchmark(n: int, cycles: int = 40) -> tuple[float, float, float]:
 
 
 def chain_benchmark() -> None:
-    sys.path.insert(0, str(DENSE.parents[1]))  # the repository root, for tests.harness
-    from tests.harness import Deployment
-
     cfg = load(DENSE)
     with tempfile.TemporaryDirectory() as tmp, Deployment(Path(tmp)) as d:
         d.collect("radar/gtracks")

@@ -4,7 +4,7 @@ wall time; no scan may be lost; end-to-end and per-service latencies.
 Real processes: a ``pfusion router``, the radar services of ``scenarios/dense.toml`` (120
 aircraft, 4 bases with 15 channels in all: 4 channel plotters, 4 elementary trackers,
 global fusion) and ``pfusion simulate --speed X``, each a child process on a free loopback
-port (``tests.harness.Deployment``). 60 s at 10x are 600 scans of 1 s: the scenario's 120 s
+port (``common.bus.local_run.Deployment``). 60 s at 10x are 600 scans of 1 s: the scenario's 120 s
 back to back five times (``--repeat 5``, seeds 1-5), so the air picture stays dense.
 
 Lost: a scan time of the input missing from any base's fused plots or elementary tracks
@@ -38,7 +38,7 @@ import numpy as np
 
 from soak import REPO, Observer, counters_table, failures, start_chain, wait_counters
 from common.deploy.config import load as load_config
-from tests.harness import Deployment
+from common.bus.local_run import Deployment
 
 DENSE = REPO / "scenarios" / "dense.toml"
 RUN_SCANS = 120  # dense.toml: 120 x 1 s

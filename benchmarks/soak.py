@@ -5,7 +5,7 @@ warm-up, and no scan may be lost.
 Real processes: a ``pfusion router`` and the radar services of ``scenarios/soak.toml``
 (2 bases x 2 channels, 2 aircraft flying circles for ever: 2 channel plotters, 2 elementary
 trackers, global fusion), each a child process on a free loopback port
-(``tests.harness.Deployment``). The scene's plots come from the simulator core
+(``common.bus.local_run.Deployment``). The scene's plots come from the simulator core
 (``common.sim.simulator.run_scenario``, the same messages as ``pfusion simulate``),
 published by this process with stamped reliable BLOCK publishers.
 
@@ -40,14 +40,13 @@ from typing import Any
 
 import zenoh
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))  # the repository root, for tests.harness
+from common.bus.local_run import ROOT, Deployment
+from common.bus.transport import LossCount, Publisher, attachment_of
+from common.deploy.config import load
+from common.sim.simulator import load_scenario, run_scenario
+from common.wire import protocol
 
-from common.bus.transport import LossCount, Publisher, attachment_of  # noqa: E402
-from common.deploy.config import load  # noqa: E402
-from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
-from common.wire import protocol  # noqa: E402
-from tests.harness import ROOT, Deployment  # noqa: E402
+REPO = Path(__file__).resolve().parents[1]
 
 SCENE = REPO / "scenarios" / "soak.toml"
 RADAR = ("channel-plotter", "elementary-tracker", "global-fusion")

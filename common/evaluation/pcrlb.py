@@ -14,7 +14,9 @@ at its first presence with the prior information P0^-1.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.special import gammaincinv
@@ -22,6 +24,18 @@ from scipy.special import gammaincinv
 from common.radar.bistatic import POS, project_jacobian
 from common.evaluation.metrics import MetricsAccumulator
 from common.core.motion import cv_F, cv_Q
+
+
+def base_information(radar: Any, bases: Sequence[Any]) -> np.ndarray:
+    """Expected information per base (B, 3, 3) of one scan: `channel_information` of each
+    base's channels, whose pd, srb, svb, saz come from ``radar.channel(id)`` (the
+    simulator's radar scene, common.sim.scenario.RadarSim)."""
+    out = []
+    for b in bases:
+        ch = [radar.channel(c) for c in b.channels]
+        out.append(channel_information(np.array([c.pd for c in ch]), np.array([c.srb for c in ch]),
+                                       np.array([c.svb for c in ch]), np.array([c.saz for c in ch])))
+    return np.array(out)
 
 
 def channel_information(pd: np.ndarray, srb: np.ndarray, svb: np.ndarray,

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from common.deploy.config import ConfigError
+from common.deploy.config import Config, ConfigError
 from common.sim.mover import Leg, Mover
 
 MODES = ("broadband", "narrowband")
@@ -340,3 +340,9 @@ def load_scenario(doc: dict[str, Any]) -> Scenario:
     if radar is None and sonar is None:
         raise ConfigError(key, "needs [sim.radar] and/or [sim.sonar]")
     return Scenario(duration, radar, sonar, name)
+
+
+def radar_scene(cfg: Config) -> RadarSim | None:
+    """The [sim.radar] part of a deployment file that is also a scenario (None without it):
+    the channels' accuracies and detection probabilities the PCRLB needs."""
+    return load_scenario(cfg.doc).radar if "sim" in cfg.doc else None

@@ -14,6 +14,7 @@ is reproducible for a seed and adding a base does not change another base's plot
 
 from __future__ import annotations
 
+import dataclasses
 import zlib
 from collections.abc import Iterator
 from typing import Any
@@ -21,13 +22,13 @@ from typing import Any
 import numpy as np
 
 from common.core.angles import wrap_2pi
-from common.deploy.config import ConfigError, RadarBase, SonarArray
+from common.deploy.config import Config, ConfigError, RadarBase, SonarArray
 from common.sim.radar import radar_plots
 from common.sim.mover import Mover
 from common.sim.scenario import Scenario, load_scenario
 from common.sim.sonar import sonar_detections
 
-__all__ = ["load_scenario", "run_scenario", "scan_times"]
+__all__ = ["load_scenario", "repeated", "run_scenario", "scan_times"]
 
 Message = tuple[str, dict[str, Any]]
 
@@ -135,3 +136,28 @@ def run_scenario(
                     out.append(stamp(key, {"t": t, "array": arr.id, "own": dict(own),
                                            **{n: a.tolist() for n, a in cols.items()}}))
         yield t, out
+
+
+def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat: int,
+             gap: float) -> Iterator[tuple[float, list[Message]]]:
+    """`repeat` runs of run_scenario back to back in scenario time, each followed by
+    `gap` seconds of the scenario without targets; seq renumbered per key. ``cfg`` is the
+    deployment (its bases and arrays)."""
+    empty = dataclasses.replace(
+        scn, duration=gap,
+        radar=None if scn.radar is None else dataclasses.replace(scn.radar, targets=[]),
+        sonar=None if scn.sonar is None else dataclasses.replace(scn.sonar, targets=[]))
+    seqs: dict[str, int] = {}
+    for i in range(repeat):
+        offset = i * (scn.duration + gap)
+        parts = [(0.0, run_scenario(scn, cfg.bases, cfg.arrays, seed + i, n_scans))]
+        if gap > 0:
+            parts.append((scn.duration, run_scenario(empty, cfg.bases, cfg.arrays, seed + i)))
+        for shift, steps in parts:
+            for t, messages in steps:
+                t_run = t + shift + offset
+                for key, msg in messages:
+                    msg["t"] = t_run
+                    if "seq" in msg:
+                        msg["seq"] = seqs[key] = seqs.get(key, -1) + 1
+                yield t_run, messages

@@ -12,7 +12,8 @@ import numpy as np
 from common.core.angles import wrap_pi
 from common.deploy.config import Config
 from common.evaluation.pcrlb import Evaluation
-from services.evaluate.main import report, truth_state
+from common.wire.sim_messages import truth_state
+from services.evaluate.main import report
 
 Msg = dict[str, Any]
 GOSPA_C_M = 2000.0

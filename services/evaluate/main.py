@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import threading
 import time
-import tomllib
 from typing import Any
 
 import numpy as np
@@ -23,9 +22,10 @@ from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import Config, section
 from common.radar.global_fusion import FusionParams
-from common.evaluation.pcrlb import Evaluation, channel_information, score_targets
+from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.bus.service import Service
-from common.sim.simulator import load_scenario
+from common.sim.scenario import radar_scene
+from common.wire.sim_messages import truth_state
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,26 +38,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--every", type=int, default=10, help="print a live line every N steps")
 
 
-def base_information(cfg: Config) -> np.ndarray | None:
-    """Expected information per base (B, 3, 3) from [sim.radar], or None."""
-    if "sim" not in cfg.doc or cfg.path is None:
-        return None
-    radar = load_scenario(tomllib.loads(cfg.path.read_text())).radar
-    if radar is None:
-        return None
-    out = []
-    for b in cfg.bases:
-        ch = [radar.channel(c) for c in b.channels]
-        out.append(channel_information(np.array([c.pd for c in ch]), np.array([c.srb for c in ch]),
-                                       np.array([c.svb for c in ch]), np.array([c.saz for c in ch])))
-    return np.array(out)
-
-
-def truth_state(m: dict[str, Any]) -> np.ndarray:
-    """Truth states (n, 6) [x vx y vy z vz] of a sim/truth/radar message."""
-    return np.column_stack([m["x"], m["vx"], m["y"], m["vy"], m["z"], m["vz"]])
-
-
 def report(ev: Evaluation, cfg: Config, settle: float) -> str:
     """The final table."""
     s = ev.metrics.summary()
@@ -65,7 +45,8 @@ def report(ev: Evaluation, cfg: Config, settle: float) -> str:
              f"GOSPA {s.gospa:.1f} (loc {s.localisation:.3g} missed {s.missed:.3g} "
              f"false {s.false:.3g} switching {s.switching:.3g})  switches {s.switches}  "
              f"breaks {s.breaks}"]
-    info = base_information(cfg)
+    radar = radar_scene(cfg)
+    info = base_information(radar, cfg.bases) if radar is not None else None
     if info is None:
         return "\n".join(lines + ["(no [sim.radar] in the config: no PCRLB)"])
     p = section(cfg, "radar.fusion", FusionParams)

@@ -14,7 +14,6 @@ import itertools
 import logging
 import time
 import tomllib
-from collections.abc import Iterator
 from pathlib import Path
 
 import zenoh
@@ -22,9 +21,7 @@ import zenoh
 from common.wire import protocol
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
-from common.deploy.config import Config
-from common.sim.scenario import Scenario
-from common.sim.simulator import Message, load_scenario, run_scenario
+from common.sim.simulator import load_scenario, repeated
 
 log = logging.getLogger("simulate")
 
@@ -46,30 +43,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gap", type=float, default=0.0, metavar="SECONDS",
                    help="with --repeat: target-free scans (clutter only) after each run, so "
                         "that trackers delete the run's tracks")
-
-
-def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat: int,
-             gap: float) -> Iterator[tuple[float, list[Message]]]:
-    """`repeat` runs of run_scenario back to back in scenario time, each followed by
-    `gap` seconds of the scenario without targets; seq renumbered per key."""
-    empty = dataclasses.replace(
-        scn, duration=gap,
-        radar=None if scn.radar is None else dataclasses.replace(scn.radar, targets=[]),
-        sonar=None if scn.sonar is None else dataclasses.replace(scn.sonar, targets=[]))
-    seqs: dict[str, int] = {}
-    for i in range(repeat):
-        offset = i * (scn.duration + gap)
-        parts = [(0.0, run_scenario(scn, cfg.bases, cfg.arrays, seed + i, n_scans))]
-        if gap > 0:
-            parts.append((scn.duration, run_scenario(empty, cfg.bases, cfg.arrays, seed + i)))
-        for shift, steps in parts:
-            for t, messages in steps:
-                t_run = t + shift + offset
-                for key, msg in messages:
-                    msg["t"] = t_run
-                    if "seq" in msg:
-                        msg["seq"] = seqs[key] = seqs.get(key, -1) + 1
-                yield t_run, messages
 
 
 def main(args: argparse.Namespace) -> int:

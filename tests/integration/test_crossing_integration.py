@@ -20,7 +20,7 @@ import pytest
 from benchmarks.crossing_swaps import CASES, SCENARIOS, Case, run_case
 from common.deploy.config import load
 from common.sim.simulator import load_scenario, run_scenario
-from services.simulator.main import repeated
+from common.sim.simulator import repeated
 
 RUNS = 50
 

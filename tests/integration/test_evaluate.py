@@ -14,7 +14,8 @@ from common.deploy.config import load, section
 from common.radar.global_fusion import FusionParams
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.bus.procs import Child
-from services.evaluate.main import base_information
+from common.evaluation.pcrlb import base_information
+from common.sim.scenario import radar_scene
 from tests.harness import SCENARIOS, Deployment
 
 SETTLE = 20.0
@@ -65,7 +66,7 @@ def test_evaluate_table_matches_direct_computation(tmp_path: Path) -> None:
 
     p = section(cfg, "radar.fusion", FusionParams)
     scores = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
-                           base_information(cfg), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]),
+                           base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]),
                            SETTLE)
     rows = {int(r[1]): r for r in (ROW.match(line) for line in text.splitlines()) if r}
     assert set(rows) == set(scores) == {1, 2}

@@ -26,7 +26,8 @@ from common.wire.radar_chain import RadarChain
 from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario
 from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
-from services.evaluate.main import base_information
+from common.evaluation.pcrlb import base_information
+from common.sim.scenario import radar_scene
 from tests.harness import SCENARIOS, Deployment
 
 SETTLE = 30.0  # s after a target's first global track before RMSE / NEES count
@@ -119,7 +120,7 @@ def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, li
     tx = np.array([b.tx for b in cfg.bases])
     rx = np.array([b.rx for b in cfg.bases])
     P0 = np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2])
-    scores = score_targets(ev, tx, rx, base_information(cfg), p.q, p.q_z, P0, SETTLE)
+    scores = score_targets(ev, tx, rx, base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, P0, SETTLE)
     nees = np.concatenate([r[:, :2] for r in ev.after(SETTLE).values()] + [np.zeros((0, 2))])
     return ChainRun(truth, by_t, first_seen_by_two(etracks, truth, cfg), ev.metrics.summary(),
                     scores, nees)
