@@ -35,7 +35,11 @@ Cycle at t (001 figure 7):
     alpha as gain; the altitude is left out (stated): it is resolved slowly by the
     altitude bands, whose spread made every pair of tracks of dense.toml ambiguous,
     kept them in memory mode and so never resolved (two aircraft at one plan position
-    are told apart by the elementary tracks' own crossing management);
+    are told apart by the elementary tracks' own crossing management); alpha scales the
+    gain of confirmed tracks only (issue 14, dense300.toml): a new track's wide
+    altitude mixture made it ambiguous with any neighbour, alpha = 0 froze it for 004's
+    maximum duration (60 s) and it was never located, a false track holding a
+    target's elementary tracks;
   module 64 + 65: per altitude band, localisation from the contributing updated
     elementary tracks, then the EKF update with [49]-[50] of each component; new
     weights, pruning and merging of the bands (common.radar.global_filter);
@@ -45,15 +49,7 @@ Cycle at t (001 figure 7):
     whose contributors were reported but gave no measurement this scan (all ambiguous
     or missed, e.g. crossing.toml t = 52, 59) is predicted only but keeps its status:
     001 puts a track in pure prediction only when it has no contributor (there the
-    contributors' estimates would still update it). Two additions (issue 14, measured
-    on dense300.toml): a cycle counts towards confirmation only when module 64 located
-    the track; a track whose contributors gave >= 2 measurements but that module 64
-    could not locate (its chi-square test failed in every band) in more than
-    `max_coast` consecutive cycles is deleted, which frees its elementary tracks for a
-    new initialisation (module 62). Such tracks were a quarter of dense300's false
-    tracks and missed targets: started from a wrong pair velocity [42]-[43], never
-    located, their bands kept the initial equal weights (sigma 2-3 km) while the
-    gate [48] of their wide mixture kept the target's four elementary tracks.
+    contributors' estimates would still update it).
     Duplicates (two tracks on disjoint bases, one target) are merged:
     common.radar.global_merge.
 Decorrelation (equivalent measurements), module 64 per band and the mixture state:
@@ -115,8 +111,7 @@ class FusionParams(InitParams):
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
         at least this many contributing updated elementary tracks.
-    max_coast: deletion after this many cycles without contributors (module 61), or
-        with contributors but failing module 64 (module doc).
+    max_coast: deletion after this many cycles without contributors (module 61).
     max_wait: seconds of wall time without a message after which the service declares
         a base stale (module doc; used by services/global_fusion, not by the core).
     max_lead: seconds of message time after the latest cycle beyond which the service
@@ -171,7 +166,7 @@ class GlobalFusion:
         self.filter = MixtureFilter(self.p, self.tx, self.rx)
         K = 2 * self.filter.A  # components: altitude bands x motion models (global_filter)
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
-                                          "n_good": ((), np.int64), "n_fail": ((), np.int64), "born": ((), float),
+                                          "n_good": ((), np.int64), "born": ((), float),
                                           "confirmed": ((), bool),
                                           "ambiguous": ((), bool),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
@@ -345,15 +340,14 @@ class GlobalFusion:
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
                                         n_meas=int(located.sum()))
         tab.ambiguous[live] = amb
-        alpha = np.where(tab.confirmed[live], alpha, 1.0)  # 004 protects confirmed tracks (doc)
+        alpha = np.where(tab.confirmed[live], alpha, 1.0)  # confirmed tracks only (module doc)
         mu = self.filter.update(xl, Pl, cl, fix, single, r, active, E, alpha)  # module 65
         tab.xm[live], tab.Pm[live], tab.mu[live] = xl, Pl, mu
         tab.x[live], tab.P[live] = imm.combine(mu, xl, Pl)
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
-        tab.n_fail[live] = np.where(multi & ~located, tab.n_fail[live] + 1, 0)
-        tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
+        tab.n_good[live] += n_act >= self.p.confirm_bases
         tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
         reporting = (r >= 0).any(axis=1)  # a contributing elementary track was reported
         tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
@@ -367,8 +361,7 @@ class GlobalFusion:
         r = row[live]
         tab.score[live] = np.append(E.score, 0.0)[r].sum(axis=1)  # module 61
         orphan = ~tab.has[live].any(axis=1)
-        dead = live[(orphan & (tab.n_coast[live] > self.p.max_coast))
-                    | (tab.n_fail[live] > self.p.max_coast)]
+        dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
         a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                                tab.has[live], self.gamma_max)  # common.radar.global_merge
         if a.size:
