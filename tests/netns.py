@@ -21,7 +21,8 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
-from typing import IO
+
+from common.bus.procs import Child
 
 REPO = Path(__file__).resolve().parents[1]
 HUB_ADDRESS = "198.18.0.1"
@@ -64,31 +65,12 @@ def kernel_netem(ns: str, dev: str) -> bool:
     return r.returncode == 0
 
 
-class NsProcess:
+class NsProcess(Child):
     """A command run inside a namespace (``ip netns exec`` execs it: same pid); stderr
-    goes to ``log``."""
+    goes to ``log``. Stopped like any child (common.bus.procs.Child)."""
 
     def __init__(self, ns: str, argv: list[str], log: Path, stdout: int | None = None) -> None:
-        self.name = log.stem
-        self._log: IO[bytes] = open(log, "ab")
-        self.proc = subprocess.Popen(
-            ["ip", "netns", "exec", ns, *argv], stdout=stdout or subprocess.DEVNULL,
-            stderr=self._log, cwd=REPO, env={**os.environ, "PYTHONUNBUFFERED": "1"})
-
-    def alive(self) -> bool:
-        return self.proc.poll() is None
-
-    def stop(self, timeout: float = 5.0) -> int:
-        """SIGTERM, then SIGKILL after ``timeout``; returns the exit code."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._log.close()
-        return int(self.proc.returncode)
+        self._spawn(log.stem, ["ip", "netns", "exec", ns, *argv], log, stdout, cwd=REPO)
 
 
 class Topology:

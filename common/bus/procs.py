@@ -23,12 +23,17 @@ class Child:
 
     def __init__(self, name: str, *args: str, log: Path | None = None,
                  stdout: int | IO[bytes] | None = None) -> None:
+        self._spawn(name, pfusion_argv(*args), log, stdout)
+
+    def _spawn(self, name: str, argv: list[str], log: Path | None,
+               stdout: int | IO[bytes] | None, cwd: Path | None = None) -> None:
+        """Start ``argv`` (unbuffered Python output; stdout discarded unless given)."""
         self.name = name
-        self.argv = pfusion_argv(*args)
+        self.argv = argv
         self._log: IO[bytes] | None = open(log, "ab") if log else None
         self.proc = subprocess.Popen(
             self.argv, stdout=stdout if stdout is not None else subprocess.DEVNULL,
-            stderr=self._log if self._log else subprocess.DEVNULL,
+            stderr=self._log if self._log else subprocess.DEVNULL, cwd=cwd,
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
         )
 
