@@ -144,6 +144,26 @@ def near(img: np.ndarray, xy: tuple[float, float], rgb: tuple[int, int, int], r:
     return bool(np.any(np.all(np.abs(patch - np.array(rgb)) <= 3, axis=-1)))
 
 
+# Around the points of base b1's elementary-track arcs, the plan drawn without and with
+# the arcs layer in one script run (no message can be drawn in between): the number of
+# pixels that the layer turned towards b1's colour (view.js BASE_COLOURS[0], light blue:
+# bluer and greener than before).
+ARC_PIXELS = """
+const ctx = $('plan').getContext('2d'), box = $('layer-arcs');
+const pts = (topics['etracks/b1'] || {arcs: []}).arcs.flatMap((a) => a.pts);
+const grab = () => pts.map((p) => ctx.getImageData(
+  Math.round(planXf.x(p[0])) - 2, Math.round(planXf.y(p[1])) - 2, 5, 5).data);
+const was = box.checked;
+box.checked = false; render(); const off = grab();
+box.checked = true; render(); const on = grab();
+box.checked = was; render();
+let n = 0;
+off.forEach((d, k) => { for (let i = 0; i < d.length; i += 4)
+  n += on[k][i + 2] > d[i + 2] + 20 && on[k][i + 1] > d[i + 1] + 10; });
+return n;
+"""
+
+
 def stall_a_page(port: int) -> socket.socket:
     """A WebSocket page that opens its connection and then never reads nor acks."""
     s = socket.create_connection(("127.0.0.1", port))
@@ -219,6 +239,9 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
                        if browser.find_element(By.ID, "details").get_attribute("data-id") else None, 30)
         assert details.startswith(f"track {one['id']}  confirmed"), details
         assert "sigmas" in details and "etracks   b" in details and "updates drawn" in details
+
+        assert browser.execute_script(ARC_PIXELS) >= 10, "b1's elementary-track arcs not drawn"
+        browser.find_element(By.ID, "layer-arcs").click()  # on, for the screenshot below
 
         now = stats(port)
         assert now["pages"] == 2  # the browser and the stalled page, which blocked nothing:
