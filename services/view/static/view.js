@@ -99,7 +99,7 @@ function drawPlan(geo, g) {
     ctx.font = "11px sans-serif"; ctx.fillText(`Tx ${b.id}`, xf.x(b.tx[0]) + 8, xf.y(b.tx[1]) + 4);
     const arcs = topics[`etracks/${b.id}`];
     if (layer("arcs") && arcs) {
-      ctx.globalAlpha = 0.6;
+      ctx.globalAlpha = 0.6; ctx.lineWidth = 2;
       arcs.arcs.forEach((a) => {
         ctx.beginPath();
         a.pts.forEach((p, j) => (j ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]))));
