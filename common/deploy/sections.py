@@ -13,7 +13,7 @@ from common.sonar.mht import MhtParams, SonarTrackerParams
 from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
 from common.deploy.ranges import ranges_of
 from common.core.crossing import CrossingParams
-from common.sonar.ctma import CtmaConfig
+from common.sonar.ctma import CtmaParams
 from common.radar.elementary import ElementaryParams, RadarCrossingParams
 from common.radar.global_fusion import FusionParams
 from common.radar.plot_fusion import PlotterParams
@@ -29,7 +29,7 @@ SECTIONS: dict[str, type] = {
     "sonar.tracker.mht": MhtParams,
     "sonar.crossing": CrossingParams,
     "sonar.tma": TmaParams,
-    "sonar.tma.ctma": CtmaConfig,
+    "sonar.tma.ctma": CtmaParams,
     "sonar.tma.support": SupportParams,
     "sonar.tma.bounds": BoundsParams,
     "sonar.tma.bounds.*": BoundsParams,

@@ -43,7 +43,7 @@ from common.sonar.tma import (
 
 
 @dataclass(frozen=True)
-class CtmaConfig:
+class CtmaParams:
     """Parameters of the TMA/CTMA cycle (``[sonar.tma.ctma]``).
 
     q1, q2, q3: residual-factor thresholds (q1 > q2 > q3) over 1, 2, 3 consecutive
@@ -171,7 +171,7 @@ def residual_factor(ctma_res: np.ndarray, tma_res: np.ndarray, sbrg: np.ndarray 
     return float(np.sum(np.abs(ctma_res) / s) / max(np.sum(np.abs(tma_res) / s), 1e-300))
 
 
-def residual_alarm(q_history: Sequence[float], cfg: CtmaConfig) -> bool:
+def residual_alarm(q_history: Sequence[float], cfg: CtmaParams) -> bool:
     """Residual check 42/48: Q >= q1 once, >= q2 in 2 or >= q3 in 3 consecutive cycles."""
     q = np.asarray(q_history, float)
     return bool(
@@ -241,7 +241,7 @@ class CycleOutput:
 class TmaTracker:
     """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3)."""
 
-    def __init__(self, bounds: Bounds | None = None, config: CtmaConfig = CtmaConfig()) -> None:
+    def __init__(self, bounds: Bounds | None = None, config: CtmaParams = CtmaParams()) -> None:
         self.bounds = bounds
         self.cfg = config
         self.t = np.empty(0)

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from common.core.rejection import Rejected
-from common.sonar.ctma import CtmaConfig, CycleOutput, TmaTracker
+from common.sonar.ctma import CtmaParams, CycleOutput, TmaTracker
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.sonar.tma import Support
 
@@ -191,7 +191,7 @@ class TmaManager:
     """
 
     def __init__(self, array: str, params: TmaParams = TmaParams(), bounds: Bounds = MINIMAL_BOUNDS,
-                 config: CtmaConfig = CtmaConfig(), support: SupportParams = SupportParams()) -> None:
+                 config: CtmaParams = CtmaParams(), support: SupportParams = SupportParams()) -> None:
         self.array = array
         self.params = params
         self.support = support

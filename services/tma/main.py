@@ -6,7 +6,7 @@ root/sonar/tma/bounds/A (bounds at run time) and root/sonar/tma/support/A (002 s
 values at run time); fetches root/sonar/history/A/<id> for
 a newly confirmed track and whenever its TMA cycle is due (the associated detections); publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
 
-Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaConfig), [sonar.tma.support]
+Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaParams), [sonar.tma.support]
 (SupportParams), [sonar.tma.bounds]
 (BoundsParams, default of every array) overridden key by key by [sonar.tma.bounds.<A>].
 """
@@ -20,7 +20,7 @@ from typing import Any
 from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import Config, ConfigError, section
-from common.sonar.ctma import CtmaConfig
+from common.sonar.ctma import CtmaParams
 from common.sonar.ctma_bounds import Bounds
 from common.bus.service import Service
 from common.core.rejection import Rejected
@@ -51,14 +51,14 @@ def _leaf_section(cfg: Config, dotted: str, table: dict[str, Any], cls: type) ->
     return section(replace(cfg, doc=doc), dotted, cls)
 
 
-def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaConfig, Bounds, SupportParams]:
+def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaParams, Bounds, SupportParams]:
     """The TMA parameters, core config, initial bounds and support values of ``array``."""
     tma = _table(cfg.doc, "sonar.tma")
     extra = sorted(k for k, v in tma.items() if isinstance(v, dict) and k not in SUBTABLES)
     if extra:
         raise ConfigError(f"sonar.tma.{extra[0]}", f"unknown table (known: {', '.join(SUBTABLES)})")
     params = _leaf_section(cfg, "sonar.tma", tma, TmaParams)
-    core = section(cfg, "sonar.tma.ctma", CtmaConfig)
+    core = section(cfg, "sonar.tma.ctma", CtmaParams)
     bounds = _table(cfg.doc, "sonar.tma.bounds")
     known = {a.id for a in cfg.arrays}
     for k, v in bounds.items():

@@ -8,7 +8,7 @@ import pytest
 from common.sonar.crlb import position_rms_bound
 from common.sonar.ctma import (
     ConvergenceDetector,
-    CtmaConfig,
+    CtmaParams,
     TmaTracker,
     residual_alarm,
     residual_factor,
@@ -27,7 +27,7 @@ from common.sonar.tma import solve_tma
 from tests.sonar.test_tma import BETA, BETA2, KN, OWN, SIG, TM, T, pos_at, true_bearings
 
 D = np.radians
-CFG = CtmaConfig()
+CFG = CtmaParams()
 
 
 def test_bounds_contains_wrapping_course():
@@ -123,7 +123,7 @@ def test_ctma_with_two_legs_bounds_current_leg():
     assert out.beta == pytest.approx(BETA2, abs=0.1)
 
 
-def run_tracker(bounds: Bounds | None, seed: int, cfg: CtmaConfig = CFG, legs: tuple[float, ...] = ()):
+def run_tracker(bounds: Bounds | None, seed: int, cfg: CtmaParams = CFG, legs: tuple[float, ...] = ()):
     rng = np.random.default_rng(seed)
     b = true_bearings(BETA2 if legs else BETA, legs) + SIG * rng.standard_normal(T.size)
     trk = TmaTracker(bounds, cfg)
@@ -180,7 +180,7 @@ def test_hopeless_bounds_fall_back_to_minimal_bounds():
 
 
 def test_tracker_detects_target_manoeuvre():
-    cfg = CtmaConfig(detect_manoeuvres=True)
+    cfg = CtmaParams(detect_manoeuvres=True)
     outs = run_tracker(None, 21, cfg, legs=(TM,))
     assert len(outs[-1].legs) == 1 and abs(outs[-1].legs[0] - TM) <= 120.0
     assert outs[-1].speed == pytest.approx(4 * KN, rel=0.3)
