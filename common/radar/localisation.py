@@ -51,6 +51,7 @@ from scipy.special import erf
 from common.core.angles import wrap_pi
 from common.core.imm import gaussian_loglik
 
+STEP_TOL = 1e-6  # squared step (in posterior sigmas) below which a row stops iterating
 COV_CORRECTION = 1.5  # inverse of the 2/3 variance ratio of the erf weight [37]
 _CHILD = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
 
@@ -262,6 +263,32 @@ def _inv_sym(A: np.ndarray) -> np.ndarray:
         return np.linalg.pinv(A, hermitian=True)
 
 
+def _information(x: np.ndarray, S: np.ndarray, c: Constraints, z_min: float
+                 ) -> tuple[np.ndarray, ...]:
+    """One posterior linearisation over N(x, S) (`_slr`): (d (N, 2K) residuals of the
+    measurements (azimuths wrapped, 0 in invalid slots), A (N, 2K, 3), U (N, 2K, 3)
+    masked, info = A' R_eff^-1 A (N, 3, 3), g = A' R_eff^-1 d (N, 3)), R_eff =
+    D + U U' (D = diag(sigma^2), 1 in invalid slots) inverted by Woodbury:
+    R_eff^-1 = D^-1 - D^-1 U (I + U' D^-1 U)^-1 U' D^-1 (3x3 solves)."""
+    K = c.rb.shape[1]
+    mask = np.concatenate([c.valid, c.valid], axis=1).astype(float)
+    d_inv = 1.0 / np.where(mask > 0, np.concatenate([c.srb, c.saz], axis=1) ** 2, 1.0)
+    y, A, U = _slr(x, S, c, z_min)
+    d = np.concatenate([c.rb, c.az], axis=1) - y
+    d[:, K:] = wrap_pi(d[:, K:])
+    d *= mask
+    A = A * mask[..., None]
+    U = U * mask[..., None]
+    DA, Dd, DU = A * d_inv[..., None], d * d_inv, U * d_inv[..., None]
+    Ut = np.swapaxes(U, 1, 2)
+    UDA, UDd = Ut @ DA, (Ut @ Dd[..., None])[..., 0]
+    CiX = np.linalg.solve(np.eye(3) + Ut @ DU, np.concatenate([UDA, UDd[..., None]], axis=2))
+    UDAt = np.swapaxes(UDA, 1, 2)
+    info = np.swapaxes(A, 1, 2) @ DA - UDAt @ CiX[..., :3]
+    g = (np.swapaxes(A, 1, 2) @ Dd[..., None])[..., 0] - (UDAt @ CiX[..., 3:])[..., 0]
+    return d, A, U, info, g
+
+
 def linearised_position(
     x_pred: np.ndarray, P_pred: np.ndarray, c: Constraints, z_min: float = 0.0,
     iterations: int = 4, floor_sigma: float = 1e5,
@@ -301,34 +328,27 @@ def linearised_position(
     """
     J0 = _inv_sym(P_pred)
     x, S = np.array(x_pred, dtype=float), np.array(P_pred, dtype=float)
-    w = c.valid.astype(float)
-    K = c.rb.shape[1]
-    meas = np.concatenate([c.rb, c.az], axis=1)
-    sig2 = np.concatenate([c.srb, c.saz], axis=1) ** 2
-    mask = np.concatenate([w, w], axis=1)
-    d_inv = 1.0 / np.where(mask > 0, sig2, 1.0)  # D^-1, R_eff = D + U U' (invalid rows: 1)
-    eye3 = np.eye(3)
-    for it in range(iterations + 1):
-        y, A, U = _slr(x, S, c, z_min)
-        d = meas - y
-        d[:, K:] = wrap_pi(d[:, K:])
-        d *= mask
-        A = A * mask[..., None]
-        U = U * mask[..., None]
-        # Woodbury: R_eff^-1 = D^-1 - D^-1 U (I + U' D^-1 U)^-1 U' D^-1
-        DA, Dd, DU = A * d_inv[..., None], d * d_inv, U * d_inv[..., None]
-        Ut = np.swapaxes(U, 1, 2)
-        UDA, UDd = Ut @ DA, (Ut @ Dd[..., None])[..., 0]
-        CiX = np.linalg.solve(eye3 + Ut @ DU, np.concatenate([UDA, UDd[..., None]], axis=2))
-        UDAt = np.swapaxes(UDA, 1, 2)
-        info = np.swapaxes(A, 1, 2) @ DA - UDAt @ CiX[..., :3]  # A' R_eff^-1 A
-        g = (np.swapaxes(A, 1, 2) @ Dd[..., None])[..., 0] - (UDAt @ CiX[..., 3:])[..., 0]
-        if it == iterations:
+    n = x.shape[0]
+    act = np.arange(n)
+    for _ in range(iterations):
+        sub = c if act.size == n else c.take(act)
+        _, _, _, info, g = _information(x[act], S[act], sub, z_min)
+        info_post = info + J0[act]
+        S_new = _inv_sym(info_post)
+        step = (S_new @ (g + (J0[act] @ (x_pred[act] - x[act])[..., None])[..., 0])[..., None])[..., 0]
+        x_new = x[act] + step
+        x_new[:, 2] = np.maximum(x_new[:, 2], z_min)
+        step = x_new - x[act]
+        x[act], S[act] = x_new, 0.5 * (S_new + np.swapaxes(S_new, 1, 2))
+        moved = np.einsum("ni,ni->n", step, (info_post @ step[..., None])[..., 0]) > STEP_TOL
+        act = act[moved]
+        if act.size == 0:
             break
-        S = _inv_sym(info + J0)
-        x = x + (S @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
-        x[:, 2] = np.maximum(x[:, 2], z_min)
-        S = 0.5 * (S + np.swapaxes(S, 1, 2))
+    d, A, U, info, g = _information(x, S, c, z_min)
+    K = c.rb.shape[1]
+    Ut = np.swapaxes(U, 1, 2)
+    sig2 = np.concatenate([c.srb, c.saz], axis=1) ** 2
+    d_inv = 1.0 / np.where(np.concatenate([c.valid, c.valid], axis=1), sig2, 1.0)
     R_eff = U @ Ut + np.eye(2 * K) / d_inv[:, :, None]
     R = _inv_sym(info + np.eye(3) / floor_sigma**2)
     z = x + (R @ g[..., None])[..., 0]
