@@ -22,6 +22,10 @@ Exit code 1 if anything was lost or the chain did not keep up.
 Measured 2026-11-23 (2 shared cores): 10x: nothing lost but global fusion fell behind (last
 scan 59.6 s late, end to end p50 48 s); 6x (idle machine) and 4x (load ~6) kept up, nothing
 lost, end to end p50 / p99 135 / 900 ms and 186 / 1675 ms.
+After global fusion on typed arrays (etracks parsed in 1.1 ms instead of 9.0 ms, a steady
+dense.toml cycle 74 -> 48 ms of CPU in-process, benchmarks/dense_scale.py): 10x, nothing
+lost, but still behind while other work shared the 2 cores: last scan 13 s late at load
+average 6.5-9 (fusion handling p99 196 ms), 35 s late at load 13-16 (p99 235 ms).
 
 Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N]
 """
