@@ -127,7 +127,7 @@ class MhtParams:
     gate: float = 3.5
     c_krit: float = 1e-3
     d_merge_hyp: float = 2.0
-    d_split: float = 5.0
+    d_split: float = 3.5
     d_merge: float = 3.0
     A: float = 0.5
     B: float = 2.0
