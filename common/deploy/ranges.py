@@ -111,6 +111,7 @@ RANGES: dict[str, dict[str, Range]] = {
         "q_a": non_negative("dB^2/s^3"), "q_f": non_negative("Hz^2/s^3"),
         "sigma_amp_db": positive("dB"), "sigma_freq_hz": positive("Hz"),
         "p_d": PROB_OPEN, "p_fa": PROB_OPEN, "beam_spacing_deg": positive("deg"),
+        "d_thr": Range("dB", -INF, INF, "()"), "clutter_level_db": non_negative("dB"),
         "alpha": PROB_OPEN, "beta": PROB_OPEN, "delete_drop": positive("log-likelihood"),
         "endfire_deg": Range("deg", 0.0, 90.0, "(]"),
         "init_brg_rate_sigma": positive("rad/s"), "init_amp_rate_sigma": positive("dB/s"),

@@ -3,16 +3,15 @@
 One `BearingTracker.step` per detection list (one clock cycle k), driven by the message
 time only:
   1. prediction with the straight-line-segment model (000 F, Q; common.core.motion);
-  2. d^2 = y' S^-1 y for every track x detection (000 d_1^2), gate d^2 <= G (000 G,
-     per pair since |S| differs per pair); a bearing-only pre-gate d_brg^2 <= G_max
-     keeps the full computation to the plausible pairs and loses none (the marginal
-     d^2 never exceeds the full one, and |S| >= |R| bounds G from above);
-  3. global nearest neighbour on the gated d^2 (000: GNN cost matrix);
+  2.-3. gated GNN (common.sonar.bearing_assoc): d^2 = y' S^-1 y (000 d_1^2), gate G per
+     pair with P_D from the track's predicted amplitude (000 erfc law) and P_FA from
+     the detection's level, global nearest neighbour on d^2 (000 GNN);
   4. seed 004 crossing management on the confirmed tracks: alpha as gain weight; a
      track leaving the ambiguity keeps its detection only if no other confirmed track's
      prediction is nearer to it (deviation; common.sonar.bearing_crossing);
   5. Kalman update with the Joseph-form covariance (000 P(k/k));
-  6. track quality L(k) = L(k-1) + dL (000 claim 4), ln(1 - P_D) for a miss;
+  6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
+     for a miss;
      tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2); confirmed
      deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
   7. every unassociated detection opens a tentative track, x(1) = H' z, P(1) = P0,
@@ -35,15 +34,15 @@ from typing import Literal
 
 import numpy as np
 
-from common.core.angles import wrap_2pi, wrap_pi
-from common.core.assignment import gnn
-from common.core.gating import gate, pair_distances
+from common.core.angles import wrap_2pi
 from common.sonar.bearing_crossing import BearingCrossing
 from common.sonar.bearing_history import BearingHistory
 from common.sonar.bearing_imm import BearingImm
 from common.sonar.bearing_merge import merged_tentative
+from common.sonar.bearing_assoc import associate
 from common.sonar.bearing_model import (
-    gate_value,
+    detection_probability,
+    false_alarm_probability,
     linear_array_sigma,
     measurement_matrix,
     missed_increment,
@@ -70,7 +69,12 @@ class TrackerParams:
         0 < q_theta_quiet < q_theta, a single model with q_theta otherwise.
     imm_sojourn_s: mean sojourn times (s) of the quiet and the manoeuvre model.
     sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
-    p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL).
+    p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL);
+        p_d is P_D_max of the amplitude law when clutter_level_db > 0.
+    d_thr: detection threshold D_thr (dB level) of the amplitude laws.
+    clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
+        its predicted amplitude (000 erfc law) and P_FA of a detection from its level
+        (bearing_model.false_alarm_probability); 0: both constant (p_d, p_fa).
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
     alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
     delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
@@ -95,6 +99,8 @@ class TrackerParams:
     sigma_freq_hz: float = 0.05
     p_d: float = 0.9
     p_fa: float = 1e-3
+    d_thr: float = 3.0
+    clutter_level_db: float = 2.0
     beam_spacing_deg: float = 2.0
     alpha: float = 1e-4
     beta: float = 1e-2
@@ -230,11 +236,15 @@ class BearingTracker:
         elif idx.size:
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
-        rows, cols_, y, detS, d2, gated = self._associate(x, P, z, Rd, idx)
+        conf = tab.status[idx] == Status.CONFIRMED
+        p_d = (detection_probability(x[:, 2], np.sqrt(P[:, 2, 2]), p.p_d, p.d_thr)  # 000 P_D(erfc)
+               if p.clutter_level_db > 0 else np.full(idx.size, p.p_d))
+        p_fa = (false_alarm_probability(level, p.p_fa, p.d_thr, p.clutter_level_db)
+                if p.clutter_level_db > 0 else np.full(n_det, p.p_fa))
+        rows, cols_, y, detS, d2, gated = associate(x, P, H, z, Rd, conf, p_d, p.p_d, p_fa, self.beam)
         alpha, ambiguous = np.ones(idx.size), np.zeros(idx.size, dtype=bool)
         keep = np.ones(rows.size, dtype=bool)
         if self.crossing is not None:  # seed 004 (common.sonar.bearing_crossing)
-            conf = tab.status[idx] == Status.CONFIRMED
             alpha, ambiguous = self.crossing.gains(
                 t, tab.id[idx], conf, x, z, rows, cols_,
                 lambda zp: self._R_diag(zp[:, 0], zp[:, 1], heading), n_det)
@@ -251,8 +261,8 @@ class BearingTracker:
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
 
-        dL = np.full(idx.size, missed_increment(p.p_d))
-        dL[rows] = quality_increment(p.p_d, p.p_fa, self.beam, detS, d2, self.m)  # 000 claim 4
+        dL = missed_increment(p_d)
+        dL[rows] = quality_increment(p_d[rows], p_fa[cols_], self.beam, detS, d2, self.m)  # 000 claim 4
         L = tab.score[idx] + dL  # 000 L(k) = L(k-1) + dL
         L_max = np.maximum(tab.L_max[idx], L)
         tentative = tab.status[idx] == Status.TENTATIVE
@@ -283,43 +293,6 @@ class BearingTracker:
         self.history.maybe_compact(tab.uid[live])
         self.t = t
         return self._cycle(t, live)
-
-    def _associate(
-        self, x: np.ndarray, P: np.ndarray, z: np.ndarray, Rd: np.ndarray, idx: np.ndarray
-    ) -> tuple[np.ndarray, ...]:
-        """Gated GNN (000 d^2, G, GNN) -> track rows, detection cols, innovations y,
-        |S| and d^2 of the assigned pairs, and the mask (M,) of detections inside the
-        gate of a confirmed track.
-
-        The mask implements 000 "medidas superfluas ... el inicio de una nueva traza": a
-        detection inside a confirmed track's gate that lost the GNN assignment opens no
-        track. Deviation from "every unassociated detection": otherwise a clutter detection
-        next to a target opens a duplicate track that takes the target over (sonar_tma)."""
-        p, m = self.params, self.m
-        N, M = x.shape[0], z.shape[0]
-        empty = np.zeros(0, dtype=np.intp)
-        gated = np.zeros(M, dtype=bool)
-        if N == 0 or M == 0:
-            return empty, empty, np.zeros((0, m)), np.zeros(0), np.zeros(0), gated
-        zp = x @ self.H.T
-        A = self.H @ P @ self.H.T  # H P^pre H'
-        yb = wrap_pi(z[None, :, 0] - zp[:, None, 0])
-        d2b = yb**2 / (A[:, 0, 0, None] + Rd[None, :, 0])
-        G_max = gate_value(p.p_d, p.p_fa, self.beam, np.prod(Rd, axis=1), m)
-        ti, dj = np.nonzero(d2b <= G_max[None, :])
-        y, S, d2 = pair_distances(zp, A, z, Rd, ti, dj, angle_idx=(0,))  # 000 y, S, d_1^2
-        detS = np.linalg.det(S)
-        ok = gate(d2, gate_value(p.p_d, p.p_fa, self.beam, detS, m))  # 000 gate G
-        ti, dj, y, d2, detS = ti[ok], dj[ok], y[ok], d2[ok], detS[ok]
-        conf = self.table.status[idx[ti]] == Status.CONFIRMED
-        gated[dj[conf]] = True
-        cost = np.full((N, M), np.inf)
-        cost[ti, dj] = np.where(conf | ~gated[dj], d2, np.inf)  # confirmed tracks first
-        pair = np.full((N, M), -1, dtype=np.intp)
-        pair[ti, dj] = np.arange(ti.size)
-        rows, cols = gnn(cost)  # 000 GNN on the squared statistical distances
-        k = pair[rows, cols]
-        return rows, cols, y[k], detS[k], d2[k], gated
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""

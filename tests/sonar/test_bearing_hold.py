@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from common.sonar.bearing_merge import merged_tentative
 from common.sonar.bearing_model import measurement_matrix
@@ -80,3 +81,22 @@ def test_register_holds_the_associated_detections_not_the_estimates() -> None:
     np.testing.assert_allclose(h["sbrg"], SIG)
     np.testing.assert_allclose(h["own_x"], seen)
     assert not np.allclose(h["brg"], tr.table.x[tr.table.active_indices()[0], 0])
+
+
+def test_amplitude_weak_detections_raise_the_quality_less_and_weak_tracks_lose_less() -> None:
+    """P_FA from the detection's level, P_D from the track's predicted amplitude (000 erfc)."""
+    def quality(levels_db: list[float], miss_at_end: bool) -> list[float]:
+        tr = BearingTracker(BB, "cylindrical", SIG)
+        out = []
+        for k, a in enumerate(levels_db):
+            tr.step(10.0 * k, np.array([1.0]), np.array([10 ** (a / 10.0)]), 0.0)
+            out.append(float(tr.table.score[tr.table.active_indices()[0]]))
+        if miss_at_end:
+            tr.step(10.0 * len(levels_db), np.zeros(0), np.zeros(0), 0.0)
+            out.append(float(tr.table.score[tr.table.active_indices()[0]]))
+        return out
+    strong, weak = quality([15.0] * 4, True), quality([4.0] * 4, True)
+    assert strong[3] - strong[2] > weak[3] - weak[2] + 3.0  # 11 dB above: ~5.5 nats
+    miss_strong, miss_weak = strong[4] - strong[3], weak[4] - weak[3]
+    assert miss_strong == pytest.approx(math.log(1 - BB.p_d), abs=1e-3)
+    assert miss_weak > miss_strong + 0.1  # a track near the threshold is often missed
