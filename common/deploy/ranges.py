@@ -127,7 +127,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "A": positive("likelihood ratio"), "B": positive("likelihood ratio"),
         "za_krit": count(1), "za_max": count(1), "n_delete": count(1),
         "sigma_max_deg": positive("deg"), "merge_sigma_max_deg": positive("deg"),
-        "res_deg": positive("deg"), "d_auf": positive("sigma"), "n_retro": count(0),
+        "res_deg": positive("deg"), "d_auf": positive("sigma"), "relink_deg": positive("deg"),
+        "n_retro": count(0),
         "max_hyp_track": count(1), "max_hyp_cycle": count(1),
     },
     "sonar.tma": {
