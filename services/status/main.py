@@ -4,35 +4,20 @@ their latest counters (``<root>/metrics/**``, published every 2 s), as a table."
 from __future__ import annotations
 
 import argparse
-import logging
 import time
 from typing import Any
 
-import zenoh
-
-from common.wire import protocol
+from common.bus.liveliness import alive, take
 from common.bus.transport import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
 
 LISTEN_S = 2.5
 COLUMNS = ("service", "instance", "in", "out", "rejected", "missed", "p50_ms", "p99_ms", "queue", "last_t")
-log = logging.getLogger("status")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p, config_required=False)
     p.add_argument("--watch", action="store_true", help=f"refresh every {LISTEN_S} s until Ctrl-C")
-
-
-def alive(session: zenoh.Session, root: str) -> list[tuple[str, str]]:
-    """(service, instance) of every liveliness token under root/alive/."""
-    prefix = f"{root}/alive/"
-    found = set()
-    for reply in session.liveliness().get(f"{root}/alive/**", timeout=2.0):
-        if reply.ok is not None:
-            service, _, instance = str(reply.ok.key_expr)[len(prefix):].partition("/")
-            found.add((service, instance))
-    return sorted(found)
 
 
 def table(live: list[tuple[str, str]], metrics: dict[tuple[str, str], dict[str, Any]]) -> str:
@@ -57,16 +42,6 @@ def table(live: list[tuple[str, str]], metrics: dict[tuple[str, str], dict[str, 
         cells = [c.ljust(w) if i < 2 else c.rjust(w) for i, (c, w) in enumerate(zip(row, widths))]
         lines.append(("  ".join(cells) + ("  " + why if why else "")).rstrip())
     return "\n".join(lines)
-
-
-def take(inbox: Inbox, metrics: dict[tuple[str, str], dict[str, Any]]) -> None:
-    """Keep the latest counters per (service, instance)."""
-    while (env := inbox.get(0.0)) is not None:
-        try:
-            m = protocol.unpack(env.payload)
-            metrics[(str(m["service"]), str(m["instance"]))] = m
-        except (protocol.DecodeError, KeyError) as e:
-            log.error("invalid metrics on %s: %s", env.key, e)
 
 
 def main(args: argparse.Namespace) -> int:

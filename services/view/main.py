@@ -4,7 +4,7 @@ One Zenoh session and one subscriber per key group feed one
 :class:`~common.wire.view_model.ViewModel`; every connected page gets a bounded,
 coalesced stream of it over a WebSocket (services/view/server.py). The Zenoh callbacks
 only append to an inbox and wake the event loop. Liveliness and counters are read as
-``pfusion status`` reads them (services.status.main: ``alive``, ``take``).
+``pfusion status`` reads them (common.bus.liveliness: ``alive``, ``take``).
 
 Why aiohttp: one well-kept asyncio library that serves both HTTP and WebSockets, with
 back-pressure on a WebSocket's writes; the standard library has no WebSocket server.
@@ -26,7 +26,7 @@ from common.bus.transport import Envelope, Inbox, open_session
 from common.cli import add_common, load_config
 from common.wire import protocol
 from common.wire.view_model import ViewModel
-from services.status.main import alive, take
+from common.bus.liveliness import alive, take
 from services.view.server import Hub, app
 
 ALIVE_PERIOD_S = 1.0
