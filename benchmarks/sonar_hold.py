@@ -31,7 +31,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +62,61 @@ class RunScore:
     n_err: int = 0
 
 
+class Scorer:
+    """Scores one run cycle by cycle (rules in the module docstring); sigma: the array's
+    bearing sigma (rad), the unit of the gate and of the resolution distance."""
+
+    def __init__(self, sigma: float) -> None:
+        self.sig = sigma
+        self.s = RunScore()
+        self.useful: set[int] = set()
+        self.confirmed: set[int] = set()
+        self.owner: dict[int, set[int]] = {}  # truth -> track serials it was resolved on
+        self.serial: dict[int, int] = {}  # track number -> serial of its holder (numbers are reused)
+        self.n_serial = 0
+
+    def add(self, truth_ids: list[int], truth_brg: np.ndarray, track_ids: list[int],
+            confirmed: np.ndarray, track_brg: np.ndarray) -> None:
+        """One tracker cycle: the truths, and every live track (number, confirmed, bearing)."""
+        s = self.s
+        s.cycles += 1
+        self.serial = {k: self.serial[k] for k in track_ids if k in self.serial}
+        for k in track_ids:
+            if k not in self.serial:
+                self.serial[k] = self.n_serial
+                self.n_serial += 1
+        ids = np.array([self.serial[k] for k, c in zip(track_ids, confirmed) if c], dtype=np.int64)
+        brg = np.asarray(track_brg, dtype=float)[np.asarray(confirmed, dtype=bool)]
+        self.confirmed.update(ids.tolist())
+        tb = np.asarray(truth_brg, dtype=float)
+        if tb.size == 0 or ids.size == 0:
+            return
+        d = np.abs(wrap_pi(tb[:, None] - brg[None, :])) / self.sig
+        sep = np.abs(wrap_pi(tb[:, None] - tb[None, :])) / self.sig
+        np.fill_diagonal(sep, np.inf)
+        for i, tid in enumerate(truth_ids):
+            if d[i].min() > GATE:
+                continue
+            j = int(np.argmin(d[i]))
+            k = int(ids[j])
+            self.useful.add(k)
+            s.sq_err += float(wrap_pi(tb[i] - brg[j]) ** 2)
+            s.n_err += 1
+            owned = self.owner.setdefault(tid, set())
+            if sep[i].min() <= RESOLVED or k in owned:
+                continue
+            if any(k in ks for t2, ks in self.owner.items() if t2 != tid):
+                s.swaps += 1  # the track of another truth
+            elif owned:
+                s.breaks += 1  # a new number for this truth
+            owned.add(k)
+
+    def result(self) -> RunScore:
+        """The run's score (false tracks: confirmed serials never a truth's nearest)."""
+        self.s.false_tracks = len(self.confirmed - self.useful)
+        return self.s
+
+
 def run_once(path: Path, seed: int) -> RunScore:
     """Run the scene of one deployment/scenario file with one seed and score it."""
     cfg = load(path)
@@ -69,56 +124,17 @@ def run_once(path: Path, seed: int) -> RunScore:
     scn = load_scenario(tomllib.loads(path.read_text()))
     params = section(cfg, "sonar.tracker", TrackerParams)
     crossing = section(cfg, "sonar.crossing", CrossingParams)
-    trk = BearingTracker(params if params.mode != "auto" else
-                         TrackerParams(**{**params.__dict__, "mode": "broadband"}),
+    trk = BearingTracker(replace(params, mode="broadband") if params.mode == "auto" else params,
                          arr.kind, arr.sigma0, crossing)
-    sig = arr.sigma0
-    s = RunScore()
-    useful: set[int] = set()
-    confirmed: set[int] = set()
-    owner: dict[int, set[int]] = {}  # truth -> track serials it was resolved on
-    serial: dict[int, int] = {}  # track number -> serial of its holder (numbers are reused)
-    n_serial = 0
+    sc = Scorer(arr.sigma0)
     for _, msgs in run_scenario(scn, [], cfg.arrays, seed):
         truth = next(m for k, m in msgs if k == "sim/truth/sonar")
         det = next(m for k, m in msgs if k.startswith("sonar/detections/"))
         own = det["own"]
         c = trk.step(det["t"], np.asarray(det["brg"]), np.asarray(det["amp"]), own["heading"],
                      own["x"], own["y"], sbrg=np.asarray(det["sbrg"]))
-        s.cycles += 1
-        new = [k for k in c.ids.tolist() if k not in serial]
-        serial = {k: v for k, v in serial.items() if k in set(c.ids.tolist())}
-        for k in new:
-            serial[k] = n_serial
-            n_serial += 1
-        ids = np.array([serial[k] for k in c.ids[c.confirmed].tolist()], dtype=np.int64)
-        brg = c.x[c.confirmed, 0]
-        confirmed.update(ids.tolist())
-        tb = np.asarray(truth["brg"])
-        if tb.size == 0:
-            continue
-        d = np.abs(wrap_pi(tb[:, None] - brg[None, :])) / sig
-        sep = np.abs(wrap_pi(tb[:, None] - tb[None, :])) / sig
-        np.fill_diagonal(sep, np.inf)
-        for i, tid in enumerate(truth["id"]):
-            if ids.size == 0 or d[i].min() > GATE:
-                continue
-            j = int(np.argmin(d[i]))
-            k = int(ids[j])
-            useful.add(k)
-            s.sq_err += float(wrap_pi(tb[i] - brg[j]) ** 2)
-            s.n_err += 1
-            if sep[i].min() <= RESOLVED:
-                continue
-            if k in owner.setdefault(tid, set()):
-                continue
-            if any(k in ks for t2, ks in owner.items() if t2 != tid):
-                s.swaps += 1  # the track of another truth
-            elif owner[tid]:
-                s.breaks += 1  # a new number for this truth
-            owner[tid].add(k)
-    s.false_tracks = len(confirmed - useful)
-    return s
+        sc.add(list(truth["id"]), np.asarray(truth["brg"]), c.ids.tolist(), c.confirmed, c.x[:, 0])
+    return sc.result()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -154,3 +154,28 @@ def test_sonar_narrowband_multiline(tmp_path: Path) -> None:
         assert len(ml[0]["lines"]) == n
         lines = [trk for trk in last["tracks"] if trk["id"] in ml[0]["lines"]]
         assert all(trk["ml"] == ml[0]["id"] for trk in lines)
+
+
+def test_sonar_hold5_through_the_process(tmp_path: Path) -> None:
+    """Issue 13's five-contact scene (3 false detections per cycle, own-ship turn, a
+    crossing pair, a North crossing) through the real bearing-tracker process, scored as
+    benchmarks/sonar_hold.py scores it in process (20 seeds there; seed 1 here)."""
+    from benchmarks.sonar_hold import Scorer
+
+    scn = SCENARIOS / "sonar_hold5.toml"
+    d, btracks, truth = _run(tmp_path, scn, "a1", 239 * 5.0)
+    with d:
+        pass
+    by_t = {m["t"]: m for m in truth}
+    sc = Scorer(load(scn).array("a1").sigma0)
+    for msg in btracks:
+        tr = by_t[msg["t"]]
+        tracks = msg["tracks"]
+        sc.add(list(tr["id"]), np.asarray(tr["brg"]), [k["id"] for k in tracks],
+               np.array([k["status"] == "confirmed" for k in tracks], dtype=bool),
+               np.array([k["x"][0] for k in tracks]))
+    r = sc.result()
+    assert r.cycles == 240
+    assert 100.0 * r.false_tracks / r.cycles < 1.0, r
+    assert r.breaks == 0 and r.swaps == 0, r
+    assert math.degrees(math.sqrt(r.sq_err / r.n_err)) < 0.6, r
