@@ -23,7 +23,8 @@ import pytest
 
 from common.core.angles import wrap_pi
 from common.wire import protocol
-from common.deploy.config import ConfigError, parse
+from common.deploy.config import ConfigError, load, parse
+from common.sonar.crlb import position_rms_bound
 from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.core.rejection import Rejected
 from common.sonar.tma_manager import SupportParams, TmaManager, TmaParams, make_bounds, thin
@@ -427,3 +428,37 @@ def test_tma_service_on_sonar_tma(tmp_path: Path) -> None:
     t_after, _, s_after = series[drop[0]]
     e = _errors(s_after, truth[t_after])
     assert e is not None and e[1] < 0.01, e
+
+
+def test_tma_five_turns_through_the_processes(tmp_path: Path) -> None:
+    """Issue 13: TMA on five own-ship turns through the real bearing-tracker and tma
+    processes (one run; the 20-run study is benchmarks/tma_hold.py): the final position
+    error within 5 x the Cramer-Rao bound of the run's geometry (all cycles, sigma0)."""
+    scn = SCENARIOS / "sonar_tma_5turns.toml"
+    t_end = 179 * 10.0
+    with Deployment(tmp_path) as d:
+        for key in ("sonar/tma/a1", "sim/truth/sonar"):
+            d.collect(key)
+        d.start("btracker", "bearing-tracker", "--config", str(scn), "--array", "a1")
+        d.start("tma", "tma", "--config", str(scn), "--array", "a1")
+        d.wait_alive(["bearing_tracker/a1", "tma/a1"])
+        d.simulate(scn, seed=1, wait_alive=["bearing_tracker/a1", "tma/a1"])
+        d.wait_for(lambda: any(m["t"] == t_end for m in d.of("sonar/tma/a1")), 180)
+        tma = d.of("sonar/tma/a1")
+        truth = sorted(d.of("sim/truth/sonar"), key=lambda m: m["t"])
+    t = np.array([m["t"] for m in truth])
+    own = np.array([[m["own"]["x"], m["own"]["y"]] for m in truth])
+    x1 = np.array([[m["x"][0], m["y"][0]] for m in truth])
+    v1 = np.array([truth[0]["vx"][0], truth[0]["vy"][0]])
+    beta = np.r_[x1[0], v1]
+    sols = [s for s in tma[-1]["solutions"] if _errors(s, truth[int(np.searchsorted(t, s["t"]))])]
+    assert sols, "no TMA solution on the contact"
+    s = sols[0]
+    k = int(np.searchsorted(t, s["t"]))
+    err = math.hypot(s["x"] - x1[k, 0], s["y"] - x1[k, 1])
+    bound = position_rms_bound(beta, t, own, load(scn).array("a1").sigma0, 0.0, float(s["t"]))
+    e4 = np.array([s["x"] - x1[k, 0], s["y"] - x1[k, 1], s["vx"] - v1[0], s["vy"] - v1[1]])
+    nees = float(e4 @ np.linalg.solve(np.asarray(s["P"]).reshape(4, 4), e4))
+    print(f"five turns through the processes: error {err:.0f} m, CRLB {bound:.0f} m, "
+          f"ratio {err / bound:.2f}, NEES {nees:.1f}")
+    assert err <= 5.0 * bound
