@@ -4,8 +4,9 @@ process (simulator -> common.sonar.bearing_tracker, the code the service runs).
 
 Run: .venv/bin/python benchmarks/sonar_hold.py [--runs 20] [--case NAME ...]
 
-Scenes (scenarios/, written before the tracker changes they measure; the tracker and
-crossing management run with the defaults of docs/configuration.md on every scene):
+Scenes (scenarios/, written before the tracker changes they measure; the tracker runs
+with the defaults of docs/configuration.md, crossing management with them except
+max_duration = 600 s, the same on every scene, set after the first measurement):
   sonar_hold5        5 contacts, 3 false detections a cycle, own-ship turn, a crossing
                      pair, a North crossing, 240 cycles of 5 s;
   sonar_hold_cpa     a 15 kn contact passing 1 km from the own ship (up to 35 deg/min),
