@@ -25,7 +25,11 @@ lost, end to end p50 / p99 135 / 900 ms and 186 / 1675 ms.
 After global fusion on typed arrays (etracks parsed in 1.1 ms instead of 9.0 ms, a steady
 dense.toml cycle 74 -> 48 ms of CPU in-process, benchmarks/dense_scale.py): 10x, nothing
 lost, but still behind while other work shared the 2 cores: last scan 13 s late at load
-average 6.5-9 (fusion handling p99 196 ms), 35 s late at load 13-16 (p99 235 ms).
+average 6.5-9 (fusion handling p99 196 ms), 35 s late at load 13-16 (p99 235 ms); at
+load 4.5-5 it kept up: 0 lost, last scan 0.08 s after its plots, end to end p50 / p99
+80 / 1316 ms (the p99: the cycles that initialise a run's 120 tracks, ~3 s of module 62
+block localisation each), fusion handling p99 100 ms. At load ~14 another run lost
+samples at this collector (blocked over the router's 1 s limit while CPU-starved).
 
 Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N]
 """
