@@ -92,7 +92,7 @@ class Feed:
             self.hub.model.ingest(kind, protocol.decode(kind, env.payload))
         except ValueError as e:  # DecodeError, or a base the deployment lacks
             n = self.hub.counters["rejected"] = self.hub.counters["rejected"] + 1
-            if n == 1 or n % 1000 == 0:
+            if n <= 10 or n % 1000 == 0:  # the first ones, then one in 1000
                 log.error("rejected %s (%d so far): %s", env.key, n, e)
 
     async def watch_alive(self) -> None:

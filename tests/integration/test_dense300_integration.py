@@ -12,7 +12,11 @@ tracks, GOSPA assignment with a 2 km cut-off):
   within 2.3 km of each other at 58 km, so the strict bound would sit on the edge);
 * RMSE / PCRLB <= 1.5 (median over targets, 30 s after each target's first track);
 * mean position NEES within a factor 1.5 of its dimension 3.
-No timing is asserted (benchmarks/dense_scale.py and load.py measure speed).
+No timing is asserted (benchmarks/dense_scale.py and load.py measure speed), and no
+timing may change the result: the run's global fusion waits up to 120 s of wall time
+for a base (`max_wait`) instead of 3 s, so a base lagging behind on a loaded machine
+(two test workers on 2 cores) is never fused without (with 3 s, one such run measured
+false 2.0 % and 9 switches).
 Measured (2 shared cores, load ~10): missed 0.54 %, false 0.76 %, 1 switch, 3 breaks,
 RMSE/PCRLB 0.95, NEES 3.83; 102 s.
 """
@@ -36,13 +40,15 @@ WARMUP = 30.0
 
 
 def test_dense300_quality_goals(tmp_path: Path) -> None:
-    cfg = load(SCENE)
+    scene = tmp_path / SCENE.name
+    scene.write_text(SCENE.read_text() + "\n[radar.fusion]\nmax_wait = 120.0\n")
+    cfg = load(scene)
     with Deployment(tmp_path) as d:
         d.collect("radar/gtracks")
         d.collect("sim/truth/radar")
-        alive = d.start_services(SCENE, ("channel-plotter", "elementary-tracker", "global-fusion"))
+        alive = d.start_services(scene, ("channel-plotter", "elementary-tracker", "global-fusion"))
         d.wait_alive(alive, timeout=120.0)
-        d.simulate(SCENE, seed=1, wait_alive=alive, timeout=900.0)
+        d.simulate(scene, seed=1, wait_alive=alive, timeout=900.0)
         truth = sorted(d.of("sim/truth/radar"), key=lambda m: m["t"])
         t_last = truth[-1]["t"]
         d.wait_for(lambda: any(m["t"] == t_last for m in d.of("radar/gtracks")), timeout=600.0)
