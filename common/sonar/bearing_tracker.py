@@ -74,7 +74,11 @@ class TrackerParams:
     d_thr: detection threshold D_thr (dB level) of the amplitude laws.
     clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
         its predicted amplitude (000 erfc law) and P_FA of a detection from its level
-        (bearing_model.false_alarm_probability); 0: both constant (p_d, p_fa).
+        (bearing_model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
+        Off by default: on the tuned 4 deg/min unequal-speed crossing
+        (sonar_cross_4dpm_uneq, 50 runs through the processes) the law at 2 dB gave 4
+        swap runs with crossing management (0 without it) and 15 without (4); the
+        scenes written for clutter (sonar_hold*) set it.
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
     alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
     delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
@@ -100,7 +104,7 @@ class TrackerParams:
     p_d: float = 0.9
     p_fa: float = 1e-3
     d_thr: float = 3.0
-    clutter_level_db: float = 2.0
+    clutter_level_db: float = 0.0
     beam_spacing_deg: float = 2.0
     alpha: float = 1e-4
     beta: float = 1e-2

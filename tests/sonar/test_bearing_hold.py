@@ -13,7 +13,7 @@ from common.sonar.bearing_merge import merged_tentative
 from common.sonar.bearing_model import measurement_matrix
 from common.sonar.bearing_tracker import BearingTracker, TrackerParams
 
-BB = TrackerParams(mode="broadband", crossing=False)
+BB = TrackerParams(mode="broadband", crossing=False, clutter_level_db=2.0)
 SIG = math.radians(1.0)
 
 
