@@ -70,10 +70,9 @@ import numpy as np
 from common.core.angles import wrap_2pi
 from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
 from common.core.kalman import predict, update
-from common.core.rejection import Rejected
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
-from common.sonar.bearing_model import detection_probability, linear_array_sigma, measurement_matrix
-from common.sonar.bearing_tracker import Cycle, TrackerParams
+from common.sonar.bearing_model import detection_probability, measurement_matrix
+from common.sonar.bearing_tracker import Cycle, TrackerParams, detection_measurements
 from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
                                          miss_weights, mixture_moments, pair_distance2, prune,
                                          sprt, track_sums)
@@ -179,38 +178,15 @@ class MhtTracker:
             return bearing_freq_Q(T, p.q_theta, p.q_a, p.q_f)
         return bearing_Q(T, p.q_theta, p.q_a)
 
-    def _R_diag(self, brg: np.ndarray, level: np.ndarray, heading: float) -> np.ndarray:
-        """Diagonal of 000 R_j per measurement: sigma_theta^2 (linear-array law or
-        sigma0), sigma_a^2[, sigma_v^2]."""
-        p = self.params
-        if self.array_kind == "linear":
-            sb = linear_array_sigma(brg, 10.0 ** (level / 10.0), heading, self.sigma0,
-                                    math.radians(p.endfire_deg))
-        else:
-            sb = np.full(brg.shape, self.sigma0)
-        cols = [sb**2, np.full(brg.shape, p.sigma_amp_db**2)]
-        if self.narrowband:
-            cols.append(np.full(brg.shape, p.sigma_freq_hz**2))
-        return np.column_stack(cols)
-
     # ------------------------------------------------------------------ cycle
 
     def step(self, t: float, brg: np.ndarray, amp: np.ndarray, heading: float,
              own_x: float = 0.0, own_y: float = 0.0, freq: np.ndarray | None = None,
              sbrg: np.ndarray | None = None) -> Cycle:
         """Process the detection list of time t (as BearingTracker.step)."""
-        if self.t is not None and not t > self.t:
-            raise Rejected("time_order", f"t={t} is not after the previous cycle t={self.t}")
-        if self.narrowband and freq is None:
-            raise ValueError("narrowband tracking needs detection frequencies")
         mp, H, tr = self.mp, self.H, self.tr
-        brg = wrap_2pi(np.asarray(brg, dtype=float).reshape(-1))
-        level = 10.0 * np.log10(np.asarray(amp, dtype=float).reshape(-1))
-        cols = [brg, level] + ([np.asarray(freq, dtype=float).reshape(-1)] if self.narrowband else [])
-        z = np.column_stack(cols)
-        Rd = self._R_diag(brg, level, heading)
-        if sbrg is not None:
-            Rd[:, 0] = np.square(np.asarray(sbrg, dtype=float).reshape(-1))
+        _, z, Rd = detection_measurements(self.params, self.array_kind, self.sigma0, self.t, t,
+                                          brg, amp, heading, freq, sbrg)
         self.t_cycle = t
         T = 0.0 if self.t is None else t - self.t
         F = self._F(T)
