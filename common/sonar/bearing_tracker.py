@@ -88,9 +88,9 @@ class TrackerParams:
     band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
     ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
-    d_merge: a tentative track within this squared distance of a confirmed track (over
-        the measurement components, both covariances) is dropped (000 d_merge; 9.21 is
-        the 99 % chi-square quantile of 2 degrees of freedom).
+    d_merge: a tentative track within this squared distance of a confirmed track (whole
+        state, both covariances) is dropped (000 d_merge; 9.21: the 94 % chi-square
+        quantile of 4 degrees of freedom).
     """
 
     mode: Literal["auto", "broadband", "narrowband"] = "auto"
@@ -265,7 +265,7 @@ class BearingTracker:
         tab.n_coast[idx] = np.where(hit, 0, tab.n_coast[idx] + 1)
         tab.status[idx[confirm]] = Status.CONFIRMED
         conf = tab.status[idx] == Status.CONFIRMED
-        merged = merged_tentative(x, P, H, conf, p.d_merge) & ~delete  # 000 d_merge
+        merged = merged_tentative(x, P, conf, p.d_merge) & ~delete  # 000 d_merge
         self._delete(idx[delete | merged])
 
         unused = ~gated

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from common.sonar.bearing_merge import merged_tentative
-from common.sonar.bearing_model import measurement_matrix
 from common.sonar.bearing_tracker import BearingTracker, TrackerParams
 
 BB = TrackerParams(mode="broadband", crossing=False, clutter_level_db=2.0)
@@ -51,18 +50,17 @@ def test_imm_beats_the_single_model_on_a_straight_contact() -> None:
 
 
 def test_a_tentative_track_on_a_confirmed_one_is_merged_a_distant_one_kept() -> None:
-    H = measurement_matrix(False)
     P = np.diag([SIG**2, 1e-6, 4.0, 0.01])
     x = np.array([[1.0, 0.0, 15.0, 0.0],        # confirmed
                   [1.0 + 2 * SIG, 0.0, 15.0, 0.0],   # tentative, d^2 = 2 < 9.21
                   [1.0 + 6 * SIG, 0.0, 15.0, 0.0],   # tentative, d^2 = 18
                   [1.0 - 6 * SIG, 0.0, 15.0, 0.0]])  # confirmed
     conf = np.array([True, False, False, True])
-    out = merged_tentative(x, np.repeat(P[None], 4, axis=0), H, conf, 9.21)
+    out = merged_tentative(x, np.repeat(P[None], 4, axis=0), conf, 9.21)
     assert out.tolist() == [False, True, False, False]
     wrapped = x.copy()
     wrapped[0, 0], wrapped[1, 0] = 0.001, 2 * math.pi - 0.001  # across North
-    assert merged_tentative(wrapped[:2], np.repeat(P[None], 2, axis=0), H, conf[:2], 9.21)[1]
+    assert merged_tentative(wrapped[:2], np.repeat(P[None], 2, axis=0), conf[:2], 9.21)[1]
 
 
 def test_register_holds_the_associated_detections_not_the_estimates() -> None:
