@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from services.demo.pictures import DPI, SIZE_IN
 
 
@@ -17,6 +19,7 @@ def png_size(path: Path) -> tuple[int, int]:
     return struct.unpack(">II", head[16:24])
 
 
+@pytest.mark.slow
 def test_demo_runs_everything_and_draws(tmp_path: Path) -> None:
     r = subprocess.run([sys.executable, "-m", "common.cli", "demo", "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=240)

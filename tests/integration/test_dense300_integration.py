@@ -39,6 +39,7 @@ SCENE = SCENARIOS / "dense300.toml"
 WARMUP = 30.0
 
 
+@pytest.mark.slow
 def test_dense300_quality_goals(tmp_path: Path) -> None:
     scene = tmp_path / SCENE.name
     scene.write_text(SCENE.read_text() + "\n[radar.fusion]\nmax_wait = 120.0\n")

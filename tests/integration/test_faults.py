@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from common.bus.transport import Publisher, free_port, open_session
 from common.deploy.config import ZenohConfig, load
@@ -42,6 +43,7 @@ def target_of(track: dict[str, Any], truth: dict[str, Any]) -> int:
     return int(truth["id"][int(np.argmin(d))])
 
 
+@pytest.mark.slow
 def test_killed_tracker_and_fusion_restarted_by_run(tmp_path: Path) -> None:
     """Kill -9 b1's elementary tracker, then global fusion, under ``pfusion run``
     (two_targets.toml lengthened to 300 scans, at 4x real time; the run is stopped once
@@ -321,6 +323,7 @@ def flood(session: Any, stop: threading.Event) -> None:
     print(f"ballast: {n * 20e3 / 1e6:.0f} MB in {time.monotonic() - t0:.1f} s")
 
 
+@pytest.mark.slow
 def test_a_stalled_subscriber_stalls_no_service(tmp_path: Path) -> None:
     """An operator's tool subscribed to everything that stops reading, while this test
     sends it ballast on another key (so that its buffers fill while two_targets.toml

@@ -126,7 +126,9 @@ def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, li
                     scores, nees)
 
 
-@pytest.fixture(scope="module", params=["two_targets", "crossing"])
+@pytest.fixture(scope="module", params=[  # one worker per scenario runs its 5 tests on one chain
+    pytest.param(name, marks=pytest.mark.xdist_group(f"global_{name}"))
+    for name in ("two_targets", "crossing")])
 def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> MonteCarlo:
     name = request.param
     scn = SCENARIOS / f"{name}.toml"

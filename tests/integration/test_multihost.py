@@ -374,6 +374,7 @@ def test_deploy_files_are_the_tested_topology() -> None:
 
 
 @pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
+@pytest.mark.slow
 def test_clean_links_give_the_single_host_tracks(multisite: Callable[[bool], MultiSite]
                                                  ) -> None:
     """Three hosts on clean links: the global tracks of the single-host chain (numbers,
@@ -389,6 +390,7 @@ def test_clean_links_give_the_single_host_tracks(multisite: Callable[[bool], Mul
 
 
 @pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
+@pytest.mark.slow
 def test_impaired_links_give_the_same_tracks(multisite: Callable[[bool], MultiSite]) -> None:
     """Site links with 50 ms delay, 10 ms jitter and 1 % loss each way: reliable
     transport, so the same global tracks and no sample missed; every global track
@@ -424,6 +426,7 @@ def confirmed_near(g: dict[str, Any], truth: dict[str, Any], tid: int) -> list[i
 
 
 @pytest.mark.timeout(600)  # 14 processes start: slow on a loaded 2-core machine
+@pytest.mark.slow
 def test_cut_site_link_reconnects_and_counts_what_it_missed(
         multisite: Callable[[bool], MultiSite]) -> None:
     """site2's link down for 10 s, then up: the routers reconnect by themselves (no

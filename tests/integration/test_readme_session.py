@@ -26,6 +26,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO
 
+import pytest
+
 from common.bus.transport import free_port
 from common.cli import COMMANDS
 from common.deploy.config import load
@@ -119,6 +121,7 @@ def running(lines: list[str]) -> set[str]:
     return {m.group(1) for line in list(lines) if (m := re.match(r"^\[(\S+)\] .* running$", line))}
 
 
+@pytest.mark.slow
 def test_readme_session_by_hand(tmp_path: Path) -> None:
     run_line, watch_line, status_line, sim_line = readme_session()
     assert (run_line[1], watch_line[1], status_line[1], sim_line[1]) == (

@@ -170,6 +170,7 @@ def records(path: Path) -> list[Record]:
     return recs
 
 
+@pytest.mark.slow
 def test_record_then_replay_gives_the_same_tracks(tmp_path: Path) -> None:
     """Plots recorded live and replayed into a fresh chain (plotters, elementary trackers,
     global fusion) give the same fused plots, elementary tracks and global tracks: same

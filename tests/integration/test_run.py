@@ -176,6 +176,7 @@ def gone(pid: int) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_run_with_router_and_simulator_delivers_every_service_output() -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     run = Run("--config", TWO_TARGETS, "--connect", endpoint, "--with-router",

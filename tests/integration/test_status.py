@@ -7,6 +7,7 @@ import subprocess
 import time
 from pathlib import Path
 
+import pytest
 
 from common.bus.procs import pfusion_argv
 from services.status.main import table
@@ -37,6 +38,7 @@ def test_table_layout() -> None:
     assert second == {len("service") + 2}
 
 
+@pytest.mark.slow
 def test_status_lists_live_services_with_their_counters(tmp_path: Path) -> None:
     with Deployment(tmp_path) as d:
         d.start("plotter", "channel-plotter", "--config", str(TWO_TARGETS), "--base", "b1")

@@ -375,6 +375,7 @@ def _errors(s: dict[str, Any], truth: dict[str, Any]) -> tuple[int, float, float
     return int(truth["id"][j]), abs(s["range"] - r) / r, abs(wrap_pi(s["course"] - k)), abs(s["speed"] - v)
 
 
+@pytest.mark.slow
 def test_tma_service_on_sonar_tma(tmp_path: Path) -> None:
     scn = SCENARIOS / "sonar_tma.toml"
     with Deployment(tmp_path) as d:

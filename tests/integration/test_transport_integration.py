@@ -7,6 +7,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
+import pytest
+
 from common.deploy.config import load
 from common.bus.procs import start_router
 from tests.harness import ROOT, SCENARIOS, Deployment
@@ -14,6 +16,7 @@ from tests.harness import ROOT, SCENARIOS, Deployment
 SCANS = 1000
 
 
+@pytest.mark.slow
 def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None:
     with Deployment(tmp_path) as d:
         d.collect("**")
@@ -46,6 +49,7 @@ def test_dense_1000_scans_every_message_arrives_in_order(tmp_path: Path) -> None
     assert len(truth) == SCANS and len(truth[0]["id"]) >= 100
 
 
+@pytest.mark.slow
 def test_router_killed_and_restarted_lost_plots_are_counted(tmp_path: Path) -> None:
     """The router is killed mid-stream and started again on its port: the plotter and
     the collector reconnect by themselves, and from the publishers' stamps the

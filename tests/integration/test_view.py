@@ -31,6 +31,9 @@ from common.bus.transport import free_port, wait_port
 from common.wire import protocol
 from tests.harness import REPO, ROOT, SCENARIOS, Deployment
 
+# one worker runs this module: its module-scoped fixture must not run once per worker
+pytestmark = pytest.mark.xdist_group("view")
+
 TWO_TARGETS = SCENARIOS / "two_targets.toml"
 OUT = REPO / "out"
 CONFIRMED_RGB = (0x66, 0xBB, 0x6A)  # view.js COLOURS.confirmed
@@ -206,6 +209,7 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         wait_port(port, 60)
         browser.get(f"http://127.0.0.1:{port}/")
         stalled = stall_a_page(port)
+        stalled_at = time.monotonic()
         d.wait_alive(names)
         args = ["simulate", "--config", str(TWO_TARGETS), "--scenario", str(TWO_TARGETS),
                 "--speed", "2", "--wait-alive", "test/collector"]
@@ -244,9 +248,13 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         browser.find_element(By.ID, "layer-arcs").click()  # on, for the screenshot below
 
         now = stats(port)
-        assert now["pages"] == 2  # the browser and the stalled page, which blocked nothing:
-        assert now["page_messages"][0] == 1 and now["page_messages"][1] > 10  # it got one message
-        assert now["waiting"] >= 1  # and still owes its ack; nothing more was queued for it
+        if now["pages"] == 2:  # the browser and the stalled page, which blocked nothing:
+            assert now["page_messages"][0] == 1 and now["page_messages"][1] > 10  # it got one
+            assert now["waiting"] >= 1  # and still owes its ack; nothing more was queued for it
+        else:  # on a loaded machine the server's heartbeat (ping at 20 s, pong due 10 s later)
+            # may have closed the stalled page already; the browser's page was fed meanwhile
+            assert time.monotonic() - stalled_at > 20.0, now
+            assert now["pages"] == 1 and now["page_messages"][0] > 10, now
         stalled.close()
         victim = next(c for c in d.children if c.name == "elementary-tracker-b3")
         victim.proc.kill()

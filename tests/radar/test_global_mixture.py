@@ -146,6 +146,7 @@ TURNING = ("pos = [-60191.0, -20217.0, 5262.0]\ncourse_deg = 9.5\nspeed = 246.3\
 
 
 @pytest.mark.parametrize("target", [HIGH_CLOSE, TURNING], ids=["high_close_91", "turning_81"])
+@pytest.mark.slow
 def test_one_target_one_unbroken_track_with_four_bases(tmp_path: Path, target: str) -> None:
     """Targets 91 and 81 of dense.toml alone over its four bases, through the whole
     in-process chain, seeds 1-8: one global track number, confirmed at every scan

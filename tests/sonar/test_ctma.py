@@ -148,6 +148,7 @@ def test_tracker_output_fields_and_correct_bounds_untouched():
     (Bounds(1000.0, 30e3, D(150.0), D(300.0), 1 * KN, 3 * KN), 20),
     (Bounds(1000.0, 30e3, D(240.0), D(30.0), 1 * KN, 8 * KN), 20),
 ])
+@pytest.mark.slow
 def test_wrong_bounds_detected_and_corrected_monte_carlo(wrong: Bounds, runs: int):
     truth = pos_at(BETA, T[-1])
     err = []
