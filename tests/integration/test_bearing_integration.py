@@ -90,7 +90,7 @@ def _check(s: dict[str, Any], period: float, sigma0: float) -> None:
 
 
 def _history(d: Deployment, array: str, tid: int) -> dict[str, Any]:
-    replies = list(d.session.get(f"{ROOT}/sonar/history/{array}/{tid}", timeout=5))
+    replies = list(d.session.get(f"{ROOT}/sonar/history/{array}/{tid}", timeout=20))
     ok = [r.ok for r in replies if r.ok is not None]
     assert len(ok) == 1, "expected one history reply"
     return protocol.decode("history", ok[0].payload.to_bytes())
@@ -115,7 +115,7 @@ def test_sonar_tma_tracks_history_and_garbage(tmp_path: Path) -> None:
         tid = next(iter(s["tracks_of"][1]))
         h = _history(d, "a1", tid)
         missing = list(d.session.get(f"{ROOT}/sonar/history/a1/999", timeout=2))
-        d.wait_for(lambda: any(len(m["rejected"]) == 2 for m in d.of("metrics/bearing_tracker/a1")), 10)
+        d.wait_for(lambda: any(len(m["rejected"]) == 2 for m in d.of("metrics/bearing_tracker/a1")), 30)
         rejected = d.of("metrics/bearing_tracker/a1")[-1]["rejected"]
     assert h["id"] == tid and h["status"] == "confirmed"
     assert h["t_hist"][0] < s["conf_at"][tid], "history must include the pre-confirmation part"
