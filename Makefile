@@ -14,7 +14,7 @@ demo: $(STAMP)
 	$(VENV)/bin/pfusion demo --view
 
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadgroup --durations=15 tests
+	$(PY) -m pytest -q -n 2 --dist worksteal --durations=15 tests
 
 bench: $(STAMP)
 	$(PY) benchmarks/core.py

@@ -20,9 +20,6 @@ from common.bus.recording import RecordWriter
 from common.bus.transport import CONNECT_TIMEOUT_S, free_port
 from common.cli import COMMANDS, EXAMPLES
 
-# one worker runs this module: its module-scoped fixture must not run once per worker
-pytestmark = pytest.mark.xdist_group("cli")
-
 REPO = Path(__file__).resolve().parents[2]
 TWO = "scenarios/two_targets.toml"
 SONAR = "scenarios/sonar_tma.toml"

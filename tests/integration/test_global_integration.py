@@ -126,14 +126,11 @@ def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, li
                     scores, nees)
 
 
-@pytest.fixture(scope="module", params=[  # one worker per scenario runs its 5 tests on one chain
-    pytest.param(name, marks=pytest.mark.xdist_group(f"global_{name}"))
-    for name in ("two_targets", "crossing")])
-def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> MonteCarlo:
-    name = request.param
+def monte_carlo(name: str, tmp_path: Path) -> MonteCarlo:
+    """The processes on RUNS runs of a scenario, scored per run."""
     scn = SCENARIOS / f"{name}.toml"
     cfg = load(scn)
-    gtracks, truth, etracks = run_chain(tmp_path_factory.mktemp(name), scn)
+    gtracks, truth, etracks = run_chain(tmp_path, scn)
     period = cfg.doc["sim"]["n_scans"] * cfg.doc["sim"]["scan_period"] + GAP
     per_base = {b: split_runs(v, period) for b, v in etracks.items()}
     runs = [score_run(cfg, g, tr, {b: per_base[b][i] for b in per_base})
@@ -142,7 +139,21 @@ def chain(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
                       sorted({m["t"] for m in etracks[cfg.bases[0].id]}))
 
 
-def test_in_process_chain_reproduces_the_processes(chain: MonteCarlo) -> None:
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["two_targets", "crossing"])
+def test_global_chain_monte_carlo(name: str, tmp_path: Path) -> None:
+    """One chain run of RUNS runs per scenario, checked five ways (one test, not a
+    module-scoped fixture shared by five: pytest-xdist may hand tests of one module to
+    both workers, and each would then run the 70 s chain)."""
+    chain = monte_carlo(name, tmp_path)
+    check_in_process_chain_reproduces_the_processes(chain)
+    check_one_cycle_per_scan(chain)
+    check_one_confirmed_track_per_target_no_switch(chain)
+    check_rmse_within_twice_the_pcrlb(chain)
+    check_average_nees_inside_its_95_percent_interval(chain)
+
+
+def check_in_process_chain_reproduces_the_processes(chain: MonteCarlo) -> None:
     """common.wire.radar_chain on seed 1 gives the global tracks the processes published in
     run 0 (numbers equal, states to 1e-9): Monte Carlo studies in one process are
     studies of the deployed chain."""
@@ -160,11 +171,12 @@ def test_in_process_chain_reproduces_the_processes(chain: MonteCarlo) -> None:
             np.testing.assert_allclose(np.ravel(a["P"]), b["P"], rtol=1e-9, atol=1e-9)
 
 
-def test_one_cycle_per_scan(chain: MonteCarlo) -> None:
+def check_one_cycle_per_scan(chain: MonteCarlo) -> None:
+    """Global fusion runs one cycle per scan, none lost or repeated."""
     assert chain.cycles == chain.scan_times
 
 
-def test_one_confirmed_track_per_target_no_switch(chain: MonteCarlo) -> None:
+def check_one_confirmed_track_per_target_no_switch(chain: MonteCarlo) -> None:
     """Each true target, in every run: exactly one confirmed global track within 15
     scans of being seen by two bases, and no false confirmed track near it; no number
     switch, no break."""
@@ -182,7 +194,7 @@ def test_one_confirmed_track_per_target_no_switch(chain: MonteCarlo) -> None:
         assert run.summary.switches == 0 and run.summary.breaks == 0, (chain.name, i, run.summary)
 
 
-def test_rmse_within_twice_the_pcrlb(chain: MonteCarlo) -> None:
+def check_rmse_within_twice_the_pcrlb(chain: MonteCarlo) -> None:
     """Position RMSE over all runs against the RMS of the PCRLB, per target."""
     for tid in (1, 2):
         sc = [run.scores[tid] for run in chain.runs]
@@ -191,7 +203,7 @@ def test_rmse_within_twice_the_pcrlb(chain: MonteCarlo) -> None:
         assert rmse <= 2.0 * bound, (chain.name, tid, rmse, bound)
 
 
-def test_average_nees_inside_its_95_percent_interval(chain: MonteCarlo) -> None:
+def check_average_nees_inside_its_95_percent_interval(chain: MonteCarlo) -> None:
     """Honest covariance: the average position NEES over the runs (both targets) is
     inside its 95 % chi-square interval at >= 90 % of the times after SETTLE (95 %
     expected), and its mean over time inside the interval too."""

@@ -43,9 +43,6 @@ from common.wire.radar_chain import RadarChain
 from services.router.main import router_config
 from tests.harness import SCENARIOS
 
-# one worker runs this module: its module-scoped fixture must not run once per worker
-pytestmark = pytest.mark.xdist_group("security")
-
 ROOT = "pf/v1"
 ATTEMPT_S = 6
 WAIT_S = 60.0  # generous: the machine may be loaded (load average 25-35 seen)

@@ -31,8 +31,6 @@ from common.bus.transport import free_port, wait_port
 from common.wire import protocol
 from tests.harness import REPO, ROOT, SCENARIOS, Deployment
 
-# one worker runs this module: its module-scoped fixture must not run once per worker
-pytestmark = pytest.mark.xdist_group("view")
 
 TWO_TARGETS = SCENARIOS / "two_targets.toml"
 OUT = REPO / "out"
