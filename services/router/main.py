@@ -6,11 +6,14 @@ unless ``access_control = false``, applies the access control generated from the
 deployment (common.deploy.acl, ``pfusion acl``): deny by default (docs/security.md).
 
 A session that stops reading (an operator's tool whose subscriber blocks) is closed
-after STALLED_CLOSE_US of back-pressure, before its publishers' own sessions give up
-(Zenoh's default, 5 s, for both): with the default, a stalled subscriber blocked every
-publisher routed to it for 4.9 s and then their links closed (a normal subscriber lost
-1517 of 3000 samples); with 1 s, the longest put took 0.9 s and nothing was lost
-(docs/faults.md, tests/integration/test_faults.py)."""
+after STALLED_CLOSE_US of back-pressure, well inside the 2 s lease of every link: each
+of the router's receive threads that routes a sample to the stalled session waits that
+long, one after the other (seen: 2 threads, 2 waits), and a link that no free thread
+read for a whole lease is closed as expired, losing its samples in flight. With 1 s,
+the two waits came to 2 s and a loaded CI machine lost 3 plots of one base that way;
+with Zenoh's default of 5 s, the publishers' own sessions gave up (a normal subscriber
+lost 1517 of 3000 samples). With 250 ms the waits span 0.5 s (docs/faults.md,
+tests/integration/test_faults.py)."""
 
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ from common.deploy.acl import access_control
 from common.deploy.config import Config, ConfigError
 
 log = logging.getLogger("router")
-STALLED_CLOSE_US = 1_000_000
+STALLED_CLOSE_US = 250_000  # 8x under the lease (transport.zenoh_config)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

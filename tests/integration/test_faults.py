@@ -334,7 +334,8 @@ def test_a_stalled_subscriber_stalls_no_service(tmp_path: Path) -> None:
         stalled = subprocess.Popen([sys.executable, "-c", STALLED, d.endpoint],
                                    stdout=subprocess.PIPE, cwd=Path(__file__).parents[2])
         try:
-            assert stalled.stdout is not None and stalled.stdout.readline() == b"subscribed\n"
+            assert stalled.stdout is not None
+            assert b"subscribed\n" in iter(stalled.stdout.readline, b"")  # after Zenoh's log, if any
             for key in ("radar/fused/*", "radar/etracks/*", "radar/gtracks", "sim/truth/radar"):
                 d.collect(key)
             alive = d.start_services(SCENARIOS / "two_targets.toml",
