@@ -1,5 +1,6 @@
-"""Child processes for the demo, ``pfusion run`` and the integration tests: each a
-fresh interpreter started with subprocess (never fork after a Zenoh session is open)."""
+"""Child processes for the demo and the integration tests: a ``pfusion`` command is a
+fork of the fork server (common.bus.launcher) unless its stdout is wanted; any other
+program, or a command whose stdout is read, is a fresh process (subprocess)."""
 
 from __future__ import annotations
 
@@ -10,31 +11,46 @@ import sys
 from pathlib import Path
 from typing import IO
 
+from common.bus.launcher import ENTRY, SUPERVISORS, Forked
 from common.bus.transport import free_port, wait_port
+
+# Zenoh's own warnings and errors (a link closed, a lease expired) in each child's log,
+# without colour codes, unless the environment says otherwise
+ZENOH_LOG = {"RUST_LOG": "warn", "NO_COLOR": "1"}
+
+
+def child_env() -> dict[str, str]:
+    """A child's environment: this one, unbuffered Python output, Zenoh's log."""
+    return {**ZENOH_LOG, **os.environ, "PYTHONUNBUFFERED": "1"}
 
 
 def pfusion_argv(*args: str) -> list[str]:
     """argv that runs ``pfusion ARGS`` with this interpreter."""
-    return [sys.executable, "-m", "common.cli", *args]
+    return [sys.executable, "-m", ENTRY, *args]
 
 
 class Child:
-    """A ``pfusion`` subcommand in its own process; stderr goes to ``log`` if given."""
+    """A ``pfusion`` subcommand in its own process; its output goes to ``log`` if given
+    (stdout too, unless ``stdout`` is given: Zenoh's own log, under RUST_LOG, is there)."""
 
     def __init__(self, name: str, *args: str, log: Path | None = None,
                  stdout: int | IO[bytes] | None = None) -> None:
-        self._spawn(name, pfusion_argv(*args), log, stdout)
+        if stdout is None and args[0] not in SUPERVISORS:
+            self.name, self.argv, self._log = name, pfusion_argv(*args), None
+            self.proc: subprocess.Popen[bytes] | Forked = Forked(list(args), log, child_env())
+        else:
+            self._spawn(name, pfusion_argv(*args), log, stdout)
 
     def _spawn(self, name: str, argv: list[str], log: Path | None,
                stdout: int | IO[bytes] | None, cwd: Path | None = None) -> None:
-        """Start ``argv`` (unbuffered Python output; stdout discarded unless given)."""
+        """Start ``argv`` (unbuffered Python output; stdout to ``stdout``, else the log)."""
         self.name = name
         self.argv = argv
         self._log: IO[bytes] | None = open(log, "ab") if log else None
         self.proc = subprocess.Popen(
-            self.argv, stdout=stdout if stdout is not None else subprocess.DEVNULL,
+            self.argv, stdout=stdout if stdout is not None else self._log or subprocess.DEVNULL,
             stderr=self._log if self._log else subprocess.DEVNULL, cwd=cwd,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+            env=child_env(),
         )
 
     def wait(self, timeout: float) -> int:

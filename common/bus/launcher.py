@@ -1,0 +1,88 @@
+"""Start ``pfusion`` commands as forks of a fork server that has imported them once.
+
+A fresh interpreter spends about 1 s of CPU importing numpy, scipy, zenoh and a
+service's modules before it does any work; a test run starts some 300 service
+processes, the demo a dozen. multiprocessing's fork server is a separate interpreter,
+started once per launching process, that imports every command once and then forks a
+child per command, which starts with everything imported. The server never opens a
+Zenoh session, so no child is forked from a process with one (zenoh-notes pitfall 4)."""
+
+from __future__ import annotations
+
+import importlib
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+from functools import cache
+from multiprocessing.context import ForkServerContext
+from pathlib import Path
+
+ENTRY = "common.cli"  # the module that ``python -m`` runs as ``pfusion`` (procs.pfusion_argv)
+SUPERVISORS = ("run", "demo")  # commands that start processes of their own: never forked
+
+
+@cache
+def _context() -> ForkServerContext:
+    """The fork server, preloading the entry point and every forked command's module
+    (looked up by name, as ``python -m`` does: common/ imports no command)."""
+    commands = importlib.import_module(ENTRY).COMMANDS
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload([ENTRY, *(m for name, (m, _) in commands.items()
+                                         if name not in SUPERVISORS)])
+    return ctx
+
+
+def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str | None) -> None:
+    """The child: stdout and stderr to ``log`` (else /dev/null), the launcher's
+    environment and directory, then ``pfusion ARGS``; its return is the exit code."""
+    fd = os.open(log or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+    os.dup2(fd, 1)
+    os.dup2(fd, 2)
+    os.close(fd)
+    sys.stdout.reconfigure(line_buffering=True, write_through=True)  # type: ignore[union-attr]
+    sys.stderr.reconfigure(line_buffering=True, write_through=True)  # type: ignore[union-attr]
+    os.environ.clear()
+    os.environ.update(env)
+    if cwd is not None:
+        os.chdir(cwd)
+    sys.exit(importlib.import_module(ENTRY).main(args))
+
+
+class Forked:
+    """The part of ``subprocess.Popen``'s interface that ``Child`` users need, over a
+    fork-server child (a daemonic one: no command in SUPERVISORS): ``pid``, ``poll``, ``wait``, ``returncode`` (negative for a
+    signal, as Popen's), ``send_signal``, ``kill``. One still running when its
+    launcher exits gets SIGTERM."""
+
+    def __init__(self, args: list[str], log: Path | None, env: dict[str, str],
+                 cwd: Path | None = None) -> None:
+        self.args = args
+        self._proc = _context().Process(
+            target=_run_command, args=(args, str(log) if log else None, env,
+                                       str(cwd) if cwd else None), daemon=True)
+        self._proc.start()
+        assert self._proc.pid is not None
+        self.pid: int = self._proc.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self._proc.exitcode
+
+    def poll(self) -> int | None:
+        return self._proc.exitcode
+
+    def wait(self, timeout: float | None = None) -> int:
+        self._proc.join(timeout)
+        code = self._proc.exitcode
+        if code is None:
+            raise subprocess.TimeoutExpired(["pfusion", *self.args], timeout or 0.0)
+        return code
+
+    def send_signal(self, sig: int) -> None:
+        if self._proc.exitcode is None:
+            os.kill(self.pid, sig)
+
+    def kill(self) -> None:
+        self.send_signal(signal.SIGKILL)
