@@ -34,7 +34,7 @@ def _context() -> ForkServerContext:
     return ctx
 
 
-def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str | None) -> None:
+def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str) -> None:
     """The child: stdout and stderr to ``log`` (else /dev/null), the launcher's
     environment and directory, then ``pfusion ARGS``; its return is the exit code."""
     fd = os.open(log or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
@@ -45,23 +45,22 @@ def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str
     sys.stderr.reconfigure(line_buffering=True, write_through=True)  # type: ignore[union-attr]
     os.environ.clear()
     os.environ.update(env)
-    if cwd is not None:
-        os.chdir(cwd)
+    os.chdir(cwd)
     sys.exit(importlib.import_module(ENTRY).main(args))
 
 
 class Forked:
     """The part of ``subprocess.Popen``'s interface that ``Child`` users need, over a
-    fork-server child (a daemonic one: no command in SUPERVISORS): ``pid``, ``poll``, ``wait``, ``returncode`` (negative for a
-    signal, as Popen's), ``send_signal``, ``kill``. One still running when its
-    launcher exits gets SIGTERM."""
+    fork-server child: ``pid``, ``poll``, ``wait``, ``returncode`` (negative for a
+    signal, as Popen's), ``send_signal``, ``kill``. Daemonic (hence no command of
+    SUPERVISORS): one still running when its launcher exits gets SIGTERM."""
 
     def __init__(self, args: list[str], log: Path | None, env: dict[str, str],
                  cwd: Path | None = None) -> None:
         self.args = args
-        self._proc = _context().Process(
+        self._proc = _context().Process(  # in the launcher's directory, as Popen would be
             target=_run_command, args=(args, str(log) if log else None, env,
-                                       str(cwd) if cwd else None), daemon=True)
+                                       str(cwd or Path.cwd())), daemon=True)
         self._proc.start()
         assert self._proc.pid is not None
         self.pid: int = self._proc.pid
