@@ -16,8 +16,10 @@ import signal
 import subprocess
 import sys
 from functools import cache
+from multiprocessing.connection import Connection
 from multiprocessing.context import ForkServerContext
 from pathlib import Path
+from typing import IO
 
 ENTRY = "common.cli"  # the module that ``python -m`` runs as ``pfusion`` (procs.pfusion_argv)
 SUPERVISORS = ("run", "demo")  # commands that start processes of their own: never forked
@@ -34,10 +36,16 @@ def _context() -> ForkServerContext:
     return ctx
 
 
-def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str) -> None:
-    """The child: stdout and stderr to ``log`` (else /dev/null), the launcher's
-    environment and directory, then ``pfusion ARGS``; its return is the exit code."""
-    fd = os.open(log or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+def _run_command(args: list[str], out: str | Connection | None, env: dict[str, str], cwd: str,
+                 new_session: bool) -> None:
+    """The child: stdout and stderr to ``out`` (a log file's path, the write end of a
+    pipe, else /dev/null), the launcher's environment and directory, its own session if
+    asked, then ``pfusion ARGS``; its return is the exit code."""
+    if isinstance(out, Connection):
+        fd = os.dup(out.fileno())
+        out.close()
+    else:
+        fd = os.open(out or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
     os.dup2(fd, 1)
     os.dup2(fd, 2)
     os.close(fd)
@@ -46,6 +54,8 @@ def _run_command(args: list[str], log: str | None, env: dict[str, str], cwd: str
     os.environ.clear()
     os.environ.update(env)
     os.chdir(cwd)
+    if new_session:
+        os.setsid()
     sys.exit(importlib.import_module(ENTRY).main(args))
 
 
@@ -56,12 +66,24 @@ class Forked:
     SUPERVISORS): one still running when its launcher exits gets SIGTERM."""
 
     def __init__(self, args: list[str], log: Path | None, env: dict[str, str],
-                 cwd: Path | None = None) -> None:
+                 cwd: Path | None = None, piped: bool = False, new_session: bool = False) -> None:
+        """``log``: the file of the child's stdout and stderr; ``piped``: a pipe instead,
+        whose read end is ``stdout``; ``new_session``: the child's own session and
+        process group (signals of the terminal reach the launcher only)."""
         self.args = args
+        self.stdout: IO[bytes] | None = None
+        out: str | Connection | None = str(log) if log else None
+        if piped:
+            read, out = _context().Pipe(duplex=False)
         self._proc = _context().Process(  # in the launcher's directory, as Popen would be
-            target=_run_command, args=(args, str(log) if log else None, env,
-                                       str(cwd or Path.cwd())), daemon=True)
+            target=_run_command, args=(args, out, env, str(cwd or Path.cwd()), new_session),
+            daemon=True)
         self._proc.start()
+        if piped:
+            assert isinstance(out, Connection)
+            out.close()
+            self.stdout = os.fdopen(os.dup(read.fileno()), "rb")
+            read.close()
         assert self._proc.pid is not None
         self.pid: int = self._proc.pid
 

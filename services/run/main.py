@@ -1,7 +1,8 @@
 """``pfusion run``: start every service of a deployment as child processes, prefix their
 log lines with their names, restart crashed ones with back-off, stop them all cleanly.
 
-Children are started with subprocess in their own process group (Ctrl-C reaches only
+Children are forks of the fork server (common.bus.launcher: a restarted service is up
+without importing anything again), each in its own session (Ctrl-C reaches only
 ``run``, which then stops the simulator and the services first and the router last).
 
 ``--with-router`` listens where the other commands given the same file look for their
@@ -14,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import signal
 import socket
 import subprocess
@@ -30,7 +30,8 @@ from common.deploy.config import ZenohConfig
 from common.deploy.deployment import (
     Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
 )
-from common.bus.procs import pfusion_argv
+from common.bus.launcher import Forked
+from common.bus.procs import child_env
 
 STOP_TIMEOUT_S = 5.0
 POLL_S = 0.1
@@ -72,17 +73,13 @@ class Supervised:
     def __init__(self, spec: ChildSpec, log: Log, restart: bool = True) -> None:
         self.spec, self.log, self.restart = spec, log, restart
         self.backoff = Backoff()
-        self.proc: subprocess.Popen[bytes] | None = None
+        self.proc: Forked | None = None
         self.started_at = 0.0
         self.restart_at: float | None = None
         self.returncode: int | None = None
 
     def start(self) -> None:
-        self.proc = subprocess.Popen(
-            pfusion_argv(*self.spec.argv), stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"}, start_new_session=True,
-        )
+        self.proc = Forked(list(self.spec.argv), None, child_env(), piped=True, new_session=True)
         self.started_at = time.monotonic()
         self.restart_at = None
         self.returncode = None

@@ -58,3 +58,17 @@ def test_signals_and_timeouts_as_popen(tmp_path: Path) -> None:
     other = Forked(["router", "--listen", "tcp/127.0.0.1:0"], None, dict(os.environ))
     other.send_signal(signal.SIGKILL)
     assert other.wait(30) == -signal.SIGKILL
+
+
+def test_piped_output_ends_at_exit_and_new_session(tmp_path: Path) -> None:
+    """As ``pfusion run`` starts its children: the output pipe reaches EOF when the child
+    exits (no copy of its write end left open elsewhere), and the child leads its own
+    session, so that a terminal's Ctrl-C does not reach it."""
+    router = Forked(["router", "--listen", "tcp/127.0.0.1:0"], None, dict(os.environ),
+                    piped=True, new_session=True)
+    assert router.stdout is not None
+    assert b"router listening" in router.stdout.readline()
+    assert os.getsid(router.pid) == router.pid != os.getsid(0)
+    router.send_signal(signal.SIGTERM)
+    assert b"router stopped" in router.stdout.read()
+    assert router.wait(30) == 0
