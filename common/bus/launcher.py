@@ -66,7 +66,7 @@ class Forked:
     SUPERVISORS): one still running when its launcher exits gets SIGTERM."""
 
     def __init__(self, args: list[str], log: Path | None, env: dict[str, str],
-                 cwd: Path | None = None, piped: bool = False, new_session: bool = False) -> None:
+                 piped: bool = False, new_session: bool = False) -> None:
         """``log``: the file of the child's stdout and stderr; ``piped``: a pipe instead,
         whose read end is ``stdout``; ``new_session``: the child's own session and
         process group (signals of the terminal reach the launcher only)."""
@@ -76,7 +76,7 @@ class Forked:
         if piped:
             read, out = _context().Pipe(duplex=False)
         self._proc = _context().Process(  # in the launcher's directory, as Popen would be
-            target=_run_command, args=(args, out, env, str(cwd or Path.cwd()), new_session),
+            target=_run_command, args=(args, out, env, str(Path.cwd()), new_session),
             daemon=True)
         self._proc.start()
         if piped:

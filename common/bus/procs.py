@@ -35,11 +35,11 @@ class Child:
 
     def __init__(self, name: str, *args: str, log: Path | None = None,
                  stdout: int | IO[bytes] | None = None) -> None:
-        if stdout is None and args[0] not in SUPERVISORS:
-            self.name, self.argv, self._log = name, pfusion_argv(*args), None
-            self.proc: subprocess.Popen[bytes] | Forked = Forked(list(args), log, child_env())
-        else:
+        if stdout is not None or args[0] in SUPERVISORS:
             self._spawn(name, pfusion_argv(*args), log, stdout)
+            return
+        self.name, self.argv, self._log = name, pfusion_argv(*args), None
+        self.proc: subprocess.Popen[bytes] | Forked = Forked(list(args), log, child_env())
 
     def _spawn(self, name: str, argv: list[str], log: Path | None,
                stdout: int | IO[bytes] | None, cwd: Path | None = None) -> None:

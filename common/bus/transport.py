@@ -37,7 +37,7 @@ def zenoh_config(
 ) -> zenoh.Config:
     """A Zenoh config: multicast scouting off, explicit endpoints, short lease; the TLS
     and authentication of ``security`` (its [zenoh.tls], [zenoh.auth] and identity).
-    With RUST_LOG set (e.g. ``RUST_LOG=warn``), Zenoh's own log goes to stderr too."""
+    With RUST_LOG set (e.g. ``RUST_LOG=warn``), Zenoh's own log goes to stdout."""
     zenoh.try_init_log_from_env()
     c = zenoh.Config()
     c.insert_json5("mode", json.dumps(mode))
