@@ -29,14 +29,21 @@ CLOSE_LINGER_S = 0.5
 CONNECT_TIMEOUT_S = 10
 ROUTER_RETRY = {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2.0}
 ROUTER_OPEN_TIMEOUT_MS = 3000
+# The lease a process announces: how long the other end of each of its links waits
+# without a byte before it closes the link. A router's is short, so that a cut
+# router-to-router link is found within 2 s (docs/deployment.md); a client's is Zenoh's
+# default, so that a router keeps the link of a client starved of CPU on a loaded
+# machine (a killed client's link closes at once with its socket, lease or not).
+ROUTER_LEASE_MS = 2000
+CLIENT_LEASE_MS = 10000
 
 
 def zenoh_config(
-    connect: list[str], listen: list[str], mode: str = "client", lease_ms: int = 2000,
+    connect: list[str], listen: list[str], mode: str = "client",
     security: ZenohConfig | None = None,
 ) -> zenoh.Config:
-    """A Zenoh config: multicast scouting off, explicit endpoints, short lease; the TLS
-    and authentication of ``security`` (its [zenoh.tls], [zenoh.auth] and identity).
+    """A Zenoh config: multicast scouting off, explicit endpoints, the lease of the mode;
+    the TLS and authentication of ``security`` (its [zenoh.tls], [zenoh.auth] and identity).
     With RUST_LOG set (e.g. ``RUST_LOG=warn``), Zenoh's own log goes to stdout."""
     zenoh.try_init_log_from_env()
     c = zenoh.Config()
@@ -44,7 +51,7 @@ def zenoh_config(
     c.insert_json5("scouting/multicast/enabled", "false")
     c.insert_json5("connect/endpoints", json.dumps(connect))
     c.insert_json5("listen/endpoints", json.dumps(listen))
-    c.insert_json5("transport/link/tx/lease", str(lease_ms))
+    c.insert_json5("transport/link/tx/lease", str(ROUTER_LEASE_MS if mode == "router" else CLIENT_LEASE_MS))
     if mode == "client":
         c.insert_json5("connect/timeout_ms", "-1" if not connect else str(CONNECT_TIMEOUT_S * 1000))
     if mode == "router":  # a lost router-router session is retried every <= 1 s (docs/deployment.md)

@@ -6,7 +6,8 @@ unless ``access_control = false``, applies the access control generated from the
 deployment (common.deploy.acl, ``pfusion acl``): deny by default (docs/security.md).
 
 A session that stops reading (an operator's tool whose subscriber blocks) is closed
-after STALLED_CLOSE_US of back-pressure, well inside the 2 s lease of every link: each
+after STALLED_CLOSE_US of back-pressure, well inside the lease of every link (2 s
+between routers, 10 s for clients: transport.ROUTER_LEASE_MS, CLIENT_LEASE_MS): each
 of the router's receive threads that routes a sample to the stalled session waits that
 long, one after the other (seen: 2 threads, 2 waits), and a link that no free thread
 read for a whole lease is closed as expired, losing its samples in flight. With 1 s,
@@ -29,7 +30,7 @@ from common.deploy.acl import access_control
 from common.deploy.config import Config, ConfigError
 
 log = logging.getLogger("router")
-STALLED_CLOSE_US = 250_000  # 8x under the lease (transport.zenoh_config)
+STALLED_CLOSE_US = 250_000  # 8x under the shortest lease (transport.ROUTER_LEASE_MS)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
