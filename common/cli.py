@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import faulthandler
 import importlib
 import importlib.metadata
 import logging
 import re
+import signal
 import sys
 
 from common.deploy.config import ConfigError, Config, load
@@ -140,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
         stream=sys.stderr,
     )
+    faulthandler.register(signal.SIGUSR1, all_threads=True)  # a hung process's stacks, on demand
     try:
         return int(module.main(args) or 0)
     except ConfigError as e:

@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import IO
 
@@ -59,13 +60,22 @@ class Child:
     def alive(self) -> bool:
         return self.proc.poll() is None
 
+    def dump_stacks(self) -> None:
+        """Have a hung child write every thread's Python stack to its log (SIGUSR1:
+        ``faulthandler``, registered by common.cli.main)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGUSR1)
+            time.sleep(0.5)
+
     def stop(self, timeout: float = 5.0) -> int:
-        """SIGTERM, then SIGKILL after ``timeout``; returns the exit code."""
+        """SIGTERM, then (stacks to the log and) SIGKILL after ``timeout``; returns the
+        exit code."""
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
             try:
                 self.proc.wait(timeout)
             except subprocess.TimeoutExpired:
+                self.dump_stacks()
                 self.proc.kill()
                 self.proc.wait()
         if self._log:

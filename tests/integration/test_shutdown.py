@@ -4,6 +4,7 @@ service's liveliness token disappears with it."""
 from __future__ import annotations
 
 import signal
+import subprocess
 import time
 from pathlib import Path
 
@@ -34,7 +35,11 @@ def test_services_exit_cleanly_within_2_s(tmp_path: Path, sig: signal.Signals) -
         for name, child in children:
             t0 = time.monotonic()
             child.proc.send_signal(sig)
-            code = child.proc.wait(5)
+            try:
+                code = child.proc.wait(5)
+            except subprocess.TimeoutExpired:
+                child.dump_stacks()  # into its log, which the Deployment prints on failure
+                raise
             took = time.monotonic() - t0
             assert code == 0, f"{name} exited with {code}"
             assert took < 2.0, f"{name} took {took:.2f} s to exit"
@@ -42,3 +47,13 @@ def test_services_exit_cleanly_within_2_s(tmp_path: Path, sig: signal.Signals) -
         t0 = time.monotonic()
         d.router.proc.send_signal(sig)
         assert d.router.proc.wait(5) == 0 and time.monotonic() - t0 < 2.0
+
+
+def test_sigusr1_writes_every_threads_stack_to_the_log_and_the_service_runs_on(tmp_path: Path) -> None:
+    with Deployment(tmp_path) as d:
+        child = d.start("elementary-tracker", *SERVICES[1][1])
+        d.wait_alive([SERVICES[1][0]])
+        child.dump_stacks()
+        log = (tmp_path / "elementary-tracker.log").read_text()
+        assert "Current thread" in log and "common/bus/service.py" in log, log
+        assert child.alive() and child.stop() == 0
