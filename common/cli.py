@@ -142,7 +142,9 @@ def main(argv: list[str] | None = None) -> int:
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
         stream=sys.stderr,
     )
-    faulthandler.register(signal.SIGUSR1, all_threads=True)  # a hung process's stacks, on demand
+    # a hung process's stacks, on demand, to the process's own stderr (sys.stderr may be
+    # a test's capture, without a file descriptor)
+    faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
     try:
         return int(module.main(args) or 0)
     except ConfigError as e:
