@@ -127,9 +127,9 @@ class FusionParams(InitParams):
         measurement against the elementary track's prediction (common.radar.decorrelation).
     filter: "mixture" (default): the altitude bands x IMM mixture (module doc of
         common.radar.global_fusion); "seed": 001's single EKF, for comparison (same
-        doc, "Seed path"): module 62's
-        blocks [36]-[41] without altitude prior, [44]-[46] as written, one component
-        with the fixed Q of [51] (q, q_z); the band and IMM parameters are then unused.
+        doc, "Seed path"): module 62's blocks [36]-[41] without altitude prior,
+        [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
+        and IMM parameters are then unused.
     """
 
     gate_prob: float = 0.999
