@@ -45,10 +45,11 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from common.deploy.config import load, section
+from common.deploy.config import parse, section
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.radar.global_fusion import FusionParams
 from common.sim.simulator import load_scenario, run_scenario
@@ -92,8 +93,9 @@ class Row:
         return bad
 
 
-def run(name: str, seed: int, scans: int | None) -> Row:
-    """The chain on scenarios/<name>.toml, scored."""
+def run(name: str, seed: int, scans: int | None, fusion: dict[str, Any] | None = None) -> Row:
+    """The chain on scenarios/<name>.toml, scored; `fusion`: keys of [radar.fusion] set
+    over the file's (benchmarks/seed_vs_mixture.py)."""
     import tomllib
 
     from common.evaluation.pcrlb import base_information
@@ -102,8 +104,10 @@ def run(name: str, seed: int, scans: int | None) -> Row:
 
     path = Path(name) if name.endswith(".toml") else REPO / "scenarios" / f"{name}.toml"
     name = path.stem
-    cfg = load(path)
-    scn = load_scenario(tomllib.loads(path.read_text()))
+    doc = tomllib.loads(path.read_text())
+    doc.setdefault("radar", {}).setdefault("fusion", {}).update(fusion or {})
+    cfg = parse(doc, path)
+    scn = load_scenario(doc)
     chain = RadarChain(cfg)
     cost = {"plotter": 0.0, "tracker": 0.0, "fusion": 0.0}
     ev = Evaluation(c=GATE_C, gamma=GATE_C)

@@ -21,10 +21,11 @@ def transition(dt: np.ndarray, sojourn: np.ndarray) -> np.ndarray:
     """Model transition probabilities p_ij (N, M, M) over steps dt (N,): expm(G dt) of the
     continuous-time chain whose generator G leaves model i at rate 1 / sojourn_i (mean
     sojourn time, s) towards the other models evenly; its stationary distribution is
-    proportional to the sojourn times, whatever the step."""
+    proportional to the sojourn times, whatever the step. One model (M = 1) has no other
+    model to leave to: p = 1."""
     dt = np.maximum(np.asarray(dt, dtype=float), 0.0)
     M = sojourn.shape[0]
-    rate = 1.0 / np.asarray(sojourn, dtype=float)
+    rate = 1.0 / np.asarray(sojourn, dtype=float) if M > 1 else np.zeros(1)
     G = np.repeat((rate / max(M - 1, 1))[:, None], M, axis=1)
     G[np.arange(M), np.arange(M)] = -rate
     lam, V = np.linalg.eig(G)

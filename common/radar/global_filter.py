@@ -21,6 +21,15 @@ none of whose bands passes is not located. The likelihood of the scan's ranges a
 azimuths under each band's prediction weighs the bands (common.radar.global_mixture).
 When the crossing test of 004 scales the gain by alpha, the likelihood is tempered by
 the same alpha (alpha = 0, memory mode: probabilities only predicted).
+Seed path (filter = "seed", issue 14): module 62 localises by the blocks [36]-[41]
+without the altitude prior and starts the track from [44]-[46] as written (z-(x, y)
+terms of [41] kept: common.radar.global_init.pair_candidates with seed=True); the same
+arrays hold one band and one model (A = M = 1), so the weight stays 1 and every step is
+001's EKF: [55]-[56] with the fixed Q of [51] (q, q_z), [49]-[50], [58]-[62]. Not
+switched, so that the comparison isolates the state and its initialisation: the
+decorrelated equivalent measurements, module 64 by posterior linearisation, the gate
+[48], the crossing test of 004, the single-base update (common.radar.global_ekf) and the
+duplicate merge (common.radar.global_merge).
 """
 
 from __future__ import annotations
@@ -67,9 +76,13 @@ class MixtureFilter:
 
     def __init__(self, p: FusionParams, tx: np.ndarray, rx: np.ndarray) -> None:
         self.p, self.tx, self.rx = p, tx, rx
-        self.A = p.alt_bands
-        self.q_models = np.array([p.q, p.q_manoeuvre])
-        self.sojourn = np.array([p.sojourn_quiet, p.sojourn_manoeuvre])
+        if p.filter == "seed":  # 001: one band, one model with the fixed Q of [51]
+            self.A, self.q_models, self.sojourn = 1, np.array([p.q]), np.array([p.sojourn_quiet])
+        else:
+            self.A = p.alt_bands
+            self.q_models = np.array([p.q, p.q_manoeuvre])
+            self.sojourn = np.array([p.sojourn_quiet, p.sojourn_manoeuvre])
+        self.M = self.q_models.size
         self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
         self.chi2_gate = np.array([np.inf] + [chi2_gate(p.gate_prob, k)
                                               for k in range(1, 2 * len(tx) + 1)])

@@ -67,12 +67,17 @@ straight target's covariance far too large (mean NEES 1.88), and the adaptive q 
 before (continuous noise level adjustment) reacted after the gate [48] had already
 dissociated the bases at the turn's onset (a new track took over, NEES bursts of 100-
 450).
+Seed path (`FusionParams.filter = "seed"`, issue 14): 001's single EKF, to measure the
+departures above against 001 as written (common.radar.global_filter says what switches;
+benchmarks/seed_vs_mixture.py measures both paths side by side).
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Literal
+
 import numpy as np
 
 from common.core import imm
@@ -120,6 +125,11 @@ class FusionParams(InitParams):
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
     eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
         measurement against the elementary track's prediction (common.radar.decorrelation).
+    filter: "mixture" (default): the altitude bands x IMM mixture (module doc of
+        common.radar.global_fusion); "seed": 001's single EKF, for comparison (same
+        doc, "Seed path"): module 62's blocks [36]-[41] without altitude prior,
+        [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
+        and IMM parameters are then unused.
     """
 
     gate_prob: float = 0.999
@@ -140,6 +150,7 @@ class FusionParams(InitParams):
     max_lead: float = 600.0
     init_confirmed_only: bool = True
     eq_gate_prob: float = 0.99999
+    filter: Literal["mixture", "seed"] = "mixture"
 
 
 class GlobalFusion:
@@ -164,7 +175,7 @@ class GlobalFusion:
             raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
         B = len(bases)
         self.filter = MixtureFilter(self.p, self.tx, self.rx)
-        K = 2 * self.filter.A  # components: altitude bands x motion models (global_filter)
+        K = self.filter.A * self.filter.M  # components: altitude bands x motion models
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "born": ((), float),
                                           "confirmed": ((), bool),
@@ -288,8 +299,9 @@ class GlobalFusion:
                 ib.append(rb[pb])
         if not ia:
             return none
+        seed = self.p.filter == "seed"
         cand = pair_candidates(E.y, E.R, E.base, np.concatenate(ia), np.concatenate(ib),
-                               self.tx, self.rx, self.init_p)  # tests 2-3, step 4
+                               self.tx, self.rx, self.init_p, seed)  # tests 2-3, step 4
         n_c = cand.rows.shape[0]
         if n_c == 0:
             return none
@@ -309,8 +321,11 @@ class GlobalFusion:
         tab = self.table
         slots = tab.add(win.size)
         used = cand.rows[win]
-        xb, Pb, wb = altitude_bands(cand.x[win][:, POS], E.y, E.R, E.base, used,
-                                    self.tx, self.rx, self.init_p)
+        if seed:  # one component: the state and covariance [44]-[46] of the candidate
+            xb, Pb, wb = cand.x[win][:, None], cand.P[win][:, None], np.ones((win.size, 1))
+        else:
+            xb, Pb, wb = altitude_bands(cand.x[win][:, POS], E.y, E.R, E.base, used,
+                                        self.tx, self.rx, self.init_p)
         xm, Pm, mu = self.filter.initial(xb, Pb, wb)
         tab.xm[slots], tab.Pm[slots], tab.mu[slots] = xm, Pm, mu
         tab.x[slots], tab.P[slots] = imm.combine(mu, xm, Pm)

@@ -44,10 +44,11 @@ class InitParams:
     sigma_vz: the constant sigma of v_z in [45] (m/s).
     z_prior_mean, z_prior_sigma: altitude prior (m) of the fine localisation, a
         pseudo-measurement z ~ N(mean, sigma^2) (not in 001; common.radar.localisation says
-        why); z_prior_sigma <= 0 switches it off.
+        why); z_prior_sigma <= 0 switches it off. Not used by filter = "seed".
     alt_bands, alt_band_low, alt_band_ratio: the initial state is a Gaussian sum over
         this many altitude bands, centred at z_min + low * ratio^a (m) with sigma
-        (ratio - 1) / 2 times the centre (`altitude_bands`).
+        (ratio - 1) / 2 times the centre (`altitude_bands`); one band still imposes
+        its altitude prior. Not used by filter = "seed".
     """
 
     az_gate_deg: float = 3.0
@@ -151,7 +152,8 @@ def initial_state(
     along the wrong slope with a small variance (crossing.toml, 1.5 km target: z 1.5 km
     off with sigma 0.3 km). Without them z is corrected by the scans' own local
     information only. decouple_z=False keeps them: an altitude band of
-    `altitude_bands` is narrow enough for its local slope to be right."""
+    `altitude_bands` is narrow enough for its local slope to be right, and the seed's
+    path (`pair_candidates` with seed=True) keeps [45] as written."""
     n = pos.shape[0]
     x = np.zeros((n, 6))
     x[:, [0, 2, 4]] = pos
@@ -182,12 +184,14 @@ class Candidates:
 
 def pair_candidates(
     y: np.ndarray, R: np.ndarray, base: np.ndarray, ia: np.ndarray, ib: np.ndarray,
-    tx: np.ndarray, rx: np.ndarray, p: InitParams,
+    tx: np.ndarray, rx: np.ndarray, p: InitParams, seed: bool = False,
 ) -> Candidates:
     """Tests 2 and 3 and step 4 for candidate pairs (ia, ib) of elementary tracks.
 
     y (E, 3) [r_b, v_b, theta] and R (E, 3, 3) of the elementary tracks, base (E,) their
     base index into tx, rx (B, 3). The bases share the receiver (001: one receiver).
+    seed: 001 as written ([radar.fusion] filter = "seed"): blocks [36]-[41] without the
+    altitude prior, and [45] with the z-(x, y) covariances of [41] (`initial_state`).
     """
     rows = np.stack([ia, ib], axis=1)
     bi, bj = base[ia], base[ib]
@@ -205,15 +209,17 @@ def pair_candidates(
                     np.ones(rows.shape, bool), tx[pb], rx[pb])
     x0 = rx[bi] + rel
     x0[:, 2] = np.clip(x0[:, 2], p.z_min, p.z_max)
-    xg, Cg = gauss_newton(x0, c, z_min=p.z_min, z_prior=p.z_prior)
+    z_prior = None if seed else p.z_prior
+    xg, Cg = gauss_newton(x0, c, z_min=p.z_min, z_prior=z_prior)
     pos, cov, nb = block_localise(xg, Cg, c, p.k_sigma, p.init_block_levels, p.z_min, p.z_max,
-                                  p.init_box_sigma, z_prior=p.z_prior)
+                                  p.init_box_sigma, z_prior=z_prior)  # 001 [36]-[41]
     ok = nb > 0  # test 2, fine: the two ellipsoids meet within k sigma
     rows, pos, cov, pb = rows[ok], pos[ok], cov[ok], pb[ok]
     c = c.take(np.flatnonzero(ok))
     v, v_cov = pair_velocity(pos, y[rows, 1], sig[rows, 1], tx[pb], rx[pb])
     ok = np.hypot(v[:, 0], v[:, 1]) <= p.v_max  # test 3
-    x, P = initial_state(pos[ok], cov[ok], v[ok], v_cov[ok], p.sigma_vz)
+    x, P = initial_state(pos[ok], cov[ok], v[ok], v_cov[ok], p.sigma_vz,
+                         decouple_z=not seed)  # 001 [44]-[46]
     c = c.take(np.flatnonzero(ok))
     res_rb, res_az, _ = residuals(pos[ok], c)
     cost = np.sum((res_rb / c.srb) ** 2 + (res_az / c.saz) ** 2, axis=1)

@@ -25,6 +25,13 @@ def test_transition_is_the_matrix_exponential_of_the_generator(tau: list[float])
         np.testing.assert_allclose(p[k], expm(G * dt[k]), atol=1e-12)
 
 
+def test_one_model_never_leaves() -> None:
+    """M = 1 (the seed's single EKF, [radar.fusion] filter = "seed"): p = 1 at every step,
+    not exp(-dt / tau), which would shrink the weight of the only model."""
+    p = imm.transition(np.array([0.0, 1.0, 50.0]), np.array([60.0]))
+    np.testing.assert_array_equal(p, np.ones((3, 1, 1)))
+
+
 def test_stationary_distribution_is_kept_by_the_chain() -> None:
     tau = np.array([60.0, 10.0])
     pi = tau / tau.sum()
