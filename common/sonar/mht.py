@@ -229,6 +229,9 @@ class MhtTracker:
         unused[lj] = False
         self._open(z[unused], Rd[unused])  # 000 new tentative tracks
         n_new = int(unused.sum())
+        zs = np.column_stack([z[:, 0], np.sqrt(Rd[:, 0])])  # register: detection brg, sbrg
+        det = np.concatenate([np.where((cmeas >= 0)[:, None], zs[np.maximum(cmeas, 0)], np.nan)
+                              if zs.size else np.full((cmeas.size, 2), np.nan), zs[unused]])
         x_pre = np.concatenate([x_pre, self.hx[-n_new:] if n_new else x_pre[:0]])
         P_pre = np.concatenate([P_pre, self.hP[-n_new:] if n_new else P_pre[:0]])
         cpar = np.concatenate([cpar, np.full(n_new, -1, dtype=np.intp)])
@@ -255,15 +258,17 @@ class MhtTracker:
         remap = np.cumsum(~drop) - 1
         self.hx, self.hP, self.hc = self.hx[live_h], self.hP[live_h], self.hc[live_h]
         self.ht, self.hmeas = remap[self.ht[live_h]], self.hmeas[live_h]
-        x_pre, P_pre, cpar = x_pre[live_h], P_pre[live_h], cpar[live_h]
+        x_pre, P_pre, cpar, det = x_pre[live_h], P_pre[live_h], cpar[live_h], det[live_h]
         tr.keep(~drop)
+        det[tr.IN[self.ht] >= 0] = np.nan  # a resolution conflict's detections may be the other's
         xi, Pi = xi[~drop], Pi[~drop]
         tr.ever_confirmed |= tr.SA == 1
 
         rows = np.column_stack([np.full(tr.size, t), xi[:, 0], np.sqrt(Pi[:, 0, 0]),
-                                np.full(tr.size, own_x), np.full(tr.size, own_y)])
+                                np.full(tr.size, own_x), np.full(tr.size, own_y),
+                                np.full((tr.size, 2), np.nan)])
         self.retro.push(CycleRecord(self.hx, self.hP, self.hc, self.ht, tr.uid.copy(), cpar,
-                                    x_pre, P_pre, F, rows))  # 000 retrodiction
+                                    x_pre, P_pre, F, rows, det))  # 000 retrodiction
         self.retro.compact(tr.uid)
         self.n_hyp_max = max(self.n_hyp_max, int(np.bincount(self.ht).max(initial=0)))
         self.t = t
@@ -353,16 +358,21 @@ class MhtTracker:
     # ------------------------------------------------------------------ register
 
     def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
-        """("confirmed" | "deleted", register columns) of a confirmed live or recently
-        deleted track, retrodicted over the last n_retro cycles; None otherwise."""
+        """("confirmed" | "deleted", register) of a confirmed live or recently deleted
+        track, None otherwise. Register: the detections of the track's main hypothesis
+        by the retro weights (t, brg, sbrg, own_x, own_y) and the retrodicted bearings at
+        every cycle (t_retro, brg_retro, sbrg_retro; common.sonar.retrodiction)."""
         slot = self.tr.slot_of(track_id)
         if slot >= 0:
             if self.tr.SA[slot] != 1:
                 return None
-            return "confirmed", self.retro.rows(track_id)
-        if track_id in self.retro.retired:
-            return "deleted", self.retro.rows(track_id)
-        return None
+            status = "confirmed"
+        elif track_id in self.retro.retired:
+            status = "deleted"
+        else:
+            return None
+        smoothed = {f"{c}_retro": v for c, v in self.retro.smoothed(track_id).items()}
+        return status, {**self.retro.rows(track_id), **smoothed}
 
 
 def _diag(v: np.ndarray) -> np.ndarray:

@@ -20,6 +20,16 @@ lineage of its heaviest member only. The newest cycle's retro weights are the fi
 weights normalised per track. The seed smooths confirmed tracks only; the smoother runs
 on all hypotheses (one batched pass costs less than selecting) and the register serves
 confirmed tracks only.
+
+The register (issue 13): TMA needs independent bearings with their true sigma, and the
+smoothed bearings are correlated from cycle to cycle (the single-hypothesis register,
+common.sonar.bearing_history, says by how much). So every record also keeps, per
+hypothesis, the detection it was formed from (bearing and sigma; none for a missed
+detection, and none while the track is in a resolution conflict of 000, whose
+detections may be the other target's). The register row of a track at cycle l is the
+detection of its main hypothesis by the retro weights c^retro(l): retrodiction re-judges
+which detection was the track's, and the smoothed bearing is served beside it
+(`smoothed`). A row whose main hypothesis has no detection is not served.
 """
 
 from __future__ import annotations
@@ -29,9 +39,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.sonar.mht_hypotheses import mixture_moments, state_diff, track_sums
+from common.sonar.bearing_history import HISTORY_COLUMNS
+from common.sonar.mht_hypotheses import heaviest, mixture_moments, state_diff, track_sums
 
-HISTORY_COLUMNS = ("t", "brg", "sbrg", "own_x", "own_y")
+SMOOTHED_COLUMNS = ("t", "brg", "sbrg")
+# columns of a record's rows: time, smoothed bearing and sigma, own position, detection
+T, SMOOTH, OWN, DET = 0, slice(1, 3), slice(3, 5), slice(5, 7)
 
 
 @dataclass
@@ -39,7 +52,9 @@ class CycleRecord:
     """One cycle: hypotheses x (H, n), P (H, n, n), c (H,), track (H,) index into uid
     (T,), parent (H,) index into the previous record's hypotheses (-1: none), x_pre,
     P_pre the prediction updated into each hypothesis, F the transition from the
-    previous cycle, rows (T, 5) the register block of this cycle (t, brg, sbrg, own)."""
+    previous cycle, rows (T, 7) the register block of this cycle (t, smoothed brg and
+    sbrg, own x and y, the main hypothesis's detection brg and sbrg), det (H, 2) the
+    detection (brg, sbrg) each hypothesis was formed from (NaN: none)."""
 
     x: np.ndarray
     P: np.ndarray
@@ -51,6 +66,7 @@ class CycleRecord:
     P_pre: np.ndarray
     F: np.ndarray
     rows: np.ndarray
+    det: np.ndarray
 
 
 def smooth(records: list[CycleRecord]) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -100,6 +116,7 @@ class Retrodiction:
         """Add a cycle, smooth the window, rewrite the window's register rows."""
         self.window.append(rec)
         self._blocks.append((rec.uid, rec.rows))
+        _main_detections(rec, rec.c)
         recs = list(self.window)
         if len(recs) > 1:
             for r, (xr, Pr, cr) in zip(recs[:-1], smooth(recs)[:-1]):
@@ -111,6 +128,7 @@ class Retrodiction:
                 _, xt, Pt = mixture_moments(xr[keep], Pr[keep], cr[keep], r.track[keep], n_t)
                 r.rows[live, 1] = xt[live, 0]
                 r.rows[live, 2] = np.sqrt(Pt[live, 0, 0])
+                _main_detections(r, cr)
 
     def retire(self, uid: int) -> None:
         """A deleted confirmed track stays queryable (the last keep_deleted of them)."""
@@ -122,7 +140,7 @@ class Retrodiction:
 
     def _block(self, uid: int) -> np.ndarray:
         sel = [rows[u == uid] for u, rows in self._blocks]
-        own = np.concatenate(sel) if sel else np.zeros((0, len(HISTORY_COLUMNS)))
+        own = np.concatenate(sel) if sel else np.zeros((0, DET.stop))
         if uid in self._inherits:
             parent, t = self._inherits[uid]
             before = self._block(parent)
@@ -130,9 +148,19 @@ class Retrodiction:
         return own
 
     def rows(self, uid: int) -> dict[str, np.ndarray]:
-        """Register columns of one track, time order (retrodicted where in the window)."""
+        """Register of one track, time order: the detections of its main hypothesis
+        (by the retro weights where in the window) with the own position."""
         block = self._block(uid)
-        return {c: block[:, i].copy() for i, c in enumerate(HISTORY_COLUMNS)}
+        block = block[np.isfinite(block[:, DET.start])]
+        cols = np.column_stack([block[:, T], block[:, DET], block[:, OWN]])
+        return {c: cols[:, i].copy() for i, c in enumerate(HISTORY_COLUMNS)}
+
+    def smoothed(self, uid: int) -> dict[str, np.ndarray]:
+        """Retrodicted bearings of one track at every cycle, time order (000
+        retrodiction; rows older than the window keep their last smoothed value)."""
+        block = self._block(uid)
+        cols = np.column_stack([block[:, T], block[:, SMOOTH]])
+        return {c: cols[:, i].copy() for i, c in enumerate(SMOOTHED_COLUMNS)}
 
     def compact(self, live_uids: np.ndarray) -> None:
         """Drop register rows nobody can query (neither live nor retired tracks) once 256
@@ -147,3 +175,13 @@ class Retrodiction:
         r = np.concatenate([b[1] for b in self._blocks[:n_old]])
         k = np.isin(u, keep_ids)
         self._blocks = [(u[k], r[k])] + self._blocks[n_old:]
+
+
+def _main_detections(rec: CycleRecord, c: np.ndarray) -> None:
+    """Register detections of a record: for every track with weight in c (H,), the
+    detection of its heaviest hypothesis (NaN where that hypothesis has none); a track
+    without weight (no descendant: deleted since) keeps its rows."""
+    main = heaviest(c, rec.track, rec.uid.size)
+    has = main >= 0
+    has[has] = c[main[has]] > 0
+    rec.rows[has, DET] = rec.det[main[has]]

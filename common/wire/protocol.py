@@ -128,6 +128,10 @@ HISTORY = {
     "status": Field("str", choices=("confirmed", "deleted")),
     "t_hist": _col(nonneg=True), "brg": _col(angle=True), "sbrg": _col(positive=True),
     "own_x": _col(), "own_y": _col(),
+    # multiple-hypothesis mode only: the retrodicted bearings at every cycle (000)
+    "t_retro": Field("floats", optional=True, nonneg=True, column="retro"),
+    "brg_retro": Field("floats", optional=True, angle=True, column="retro"),
+    "sbrg_retro": Field("floats", optional=True, positive=True, column="retro"),
 }
 TMA_SOLUTION = {
     "track": Field("int", nonneg=True), "t": T,

@@ -2,7 +2,8 @@
 
 Subscribes root/sonar/detections/A, publishes root/sonar/btracks/A each cycle and
 answers root/sonar/history/A/<id> with the bearing register of a confirmed track
-(docs/protocol.md; retrodicted in the multiple-hypothesis mode). Parameters:
+(docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
+main hypothesis, with the retrodicted bearings beside). Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
 [sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only).
 """
@@ -82,8 +83,7 @@ def main(args: argparse.Namespace) -> int:
         status, h = found
         query.reply(query.key_expr, protocol.encode({
             "v": protocol.VERSION, "t": float(core.t or 0.0), "array": arr.id,
-            "id": int(chunk), "status": status, "t_hist": h["t"], "brg": h["brg"],
-            "sbrg": h["sbrg"], "own_x": h["own_x"], "own_y": h["own_y"],
+            "id": int(chunk), "status": status, "t_hist": h.pop("t"), **h,
         }))
 
     svc.subscribe(f"sonar/detections/{arr.id}", on_det)

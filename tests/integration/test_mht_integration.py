@@ -8,7 +8,8 @@ run by common.evaluation.crossing_eval as benchmarks/crossing_swaps.py does: no 
 number swap in any run, no truth lost. Then the history queryable of a confirmed track
 serves the retrodicted register: from the track's first detection, its rows older than
 n_retro cycles differ from the bearings the tracker published (smoothed afterwards),
-its newest row equals the published one.
+its newest row equals the published one; the rows TMA uses (brg) are detections the
+simulator published, with their sigma.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ def test_mht_crossing_with_clutter_no_swap_and_retrodicted_history(tmp_path: Pat
     with Deployment(tmp_path) as d:
         d.collect("sim/truth/sonar")
         d.collect("sonar/btracks/a1")
+        d.collect("sonar/detections/a1")
         d.start("btracker", "bearing-tracker", "--config", str(cfg), "--array", "a1")
         d.wait_alive(["bearing_tracker/a1"])
         d.simulate(cfg, seed=1, wait_alive=["bearing_tracker/a1"], timeout=900.0,
@@ -67,8 +69,15 @@ def test_mht_crossing_with_clutter_no_swap_and_retrodicted_history(tmp_path: Pat
     published = {m["t"]: next(tr["x"][0] for tr in m["tracks"] if tr["id"] == tid)
                  for m in btracks if any(tr["id"] == tid for tr in m["tracks"])}
     # the simulator's trailing gap may delete the track before the query: still served
-    assert hist["status"] in ("confirmed", "deleted") and hist["t_hist"][0] == min(published)
-    t_hist, brg = np.asarray(hist["t_hist"]), np.asarray(hist["brg"])
+    assert hist["status"] in ("confirmed", "deleted") and hist["t_retro"][0] == min(published)
+    dets = {m["t"]: np.asarray(m["brg"]) for m in d.of("sonar/detections/a1")}
+    for t, b in zip(hist["t_hist"], hist["brg"]):
+        assert np.min(np.abs(dets[t] - b)) < 1e-12  # a detection of that cycle, as measured
+    # none in a resolution conflict (published as ambiguous), most of the other cycles
+    mine_t = [(m["t"], tr["ambiguous"]) for m in btracks for tr in m["tracks"] if tr["id"] == tid]
+    assert not {t for t, amb in mine_t if amb} & set(hist["t_hist"].tolist())
+    assert hist["t_hist"].size >= 0.7 * sum(not amb for _, amb in mine_t)
+    t_hist, brg = np.asarray(hist["t_retro"]), np.asarray(hist["brg_retro"])
     # rows of cycles where this number was not published: a track re-linked at the end
     # of a resolution conflict (000) carries the history it continues; compare the rest
     mine = np.array([t in published for t in t_hist])

@@ -131,10 +131,10 @@ def test_register_is_retrodicted_and_beats_the_filtered_bearings():
         filt.append(c.x[0, 0] if c.ids.size else np.nan)
     ident = int(c.ids[c.confirmed][0])
     status, h = trk.history_of(ident)
-    assert status == "confirmed" and h["t"].size == 60
+    assert status == "confirmed" and h["t_retro"].size == 60
     truth = np.array([x[3][0] for x in cyc])
     n = 60 - trk.mp.n_retro
-    e_retro = np.sqrt(np.mean((h["brg"][5:n] - truth[5:n]) ** 2))
+    e_retro = np.sqrt(np.mean((h["brg_retro"][5:n] - truth[5:n]) ** 2))
     e_filt = np.sqrt(np.mean((np.array(filt)[5:n] - truth[5:n]) ** 2))
     assert e_retro < 0.8 * e_filt, (e_retro, e_filt)
     assert trk.history_of(10_000) is None
@@ -202,3 +202,26 @@ def test_relink_of_a_new_track_to_a_coalesced_conflicting_pair_by_rate_sign():
     # omega (11 sigma from both, beyond d_Auf) continues track 2, whose rate sign it has
     assert drop.tolist() == [False, False, True]
     assert trk.ht.tolist() == [0, 2, 1] and (tr.IN[:2] == -1).all()
+
+
+def test_register_holds_the_targets_own_detections_with_their_sigma():
+    """TMA's input (issue 13): independent detections, not smoothed bearings; with clutter
+    and missed detections, every served row is one of that cycle's detections, nearly
+    all of them the target's, and a missed cycle has no row."""
+    trk = tracker(rho_f=1.0 / (2 * math.pi * 10.0))
+    cyc = scene([1.0], [1e-4], 80, seed=11, clutter=1.0, pd=0.8)
+    for t, b, a, _ in cyc:
+        c = trk.step(t, b, a, 0.0, own_x=t, own_y=-t)
+    status, h = trk.history_of(int(c.ids[c.confirmed][0]))
+    by_t = {t: (b, truth) for t, b, _, truth in cyc}
+    assert status == "confirmed" and h["t"].size < h["t_retro"].size  # missed cycles
+    own_target = 0
+    for t, brg in zip(h["t"], h["brg"]):
+        dets, truth = by_t[t]
+        assert np.min(np.abs(dets - brg)) < 1e-12  # a detection of that cycle, as measured
+        own_target += abs(brg - truth[0]) < 4 * DEG
+    assert own_target >= 0.95 * h["t"].size
+    assert h["t"].size >= 0.7 * 80 * 0.8
+    np.testing.assert_allclose(h["sbrg"], DEG)  # the detections' sigma (cylindrical array)
+    np.testing.assert_array_equal(h["own_x"], h["t"])
+    np.testing.assert_array_equal(h["own_y"], -h["t"])
