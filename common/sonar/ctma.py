@@ -14,7 +14,7 @@ bounds, the edge checks and the correction are in ``common.sonar.ctma_bounds``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
@@ -84,6 +84,33 @@ def _course_into(k: float, b: Bounds) -> float:
     return b.k_min + d
 
 
+def new_leg_bounds(b: Bounds) -> Bounds:
+    """Bounds of a new target leg (003 paragraph 55, claim 9): the course is freed, range
+    and speed intervals are kept.
+
+    Paragraph 55 sets "new bounds" for the position after a manoeuvre so that changes of
+    course and/or speed are taken into account, without saying how. Rule chosen: a
+    manoeuvre is a change of course, so the old course interval cannot hold; the speed
+    interval (the target's class) and the range interval (it refers to the current
+    time) are kept. A speed outside it is found and corrected by the error handling of
+    the new leg (claims 5-8), and an operator's bounds message replaces these bounds.
+    Deviation: the seed's range bounds for the start of the new leg derived from the
+    estimated end position of the original one are not formed: the joint solve starts
+    the new leg at that end position by construction (002 eq. 16).
+    """
+    return replace(b, k_min=0.0, k_max=TWO_PI)
+
+
+def legs_inside(beta: np.ndarray, leg_bounds: Sequence[Bounds | None]) -> bool:
+    """True when course and speed of every earlier leg j of ``beta`` lie in ``leg_bounds[j]`` (003 claim 9)."""
+    for j, b in enumerate(leg_bounds):
+        if b is not None:
+            vx, vy = beta[2 + 2 * j:4 + 2 * j]
+            if not b.contains(b.r_min, float(np.arctan2(vx, vy) % TWO_PI), float(np.hypot(vx, vy))):
+                return False
+    return True
+
+
 def solve_ctma(
     t: np.ndarray,
     brg: np.ndarray,
@@ -94,13 +121,17 @@ def solve_ctma(
     start: TmaSolution,
     support: Sequence[Support] = (),
     legs: Sequence[float] = (),
+    leg_bounds: Sequence[Bounds | None] = (),
 ) -> TmaSolution:
-    """Constrained TMA: bearing least squares with R, K, V of the current leg bounded (003 claim 1).
+    """Constrained TMA: bearing least squares with R, K, V bounded, per target leg (003 claims 1, 9).
 
-    Parameterisation p = (B, R, K, V, Vx_j, Vy_j of earlier legs): the target sits at
-    range R on bearing B from the own position at the latest bearing time and moves with
-    speed V on course K; box bounds on (R, K, V) go to scipy's trust-region reflective
-    least squares. Starts: the TMA solution clipped into the bounds and the centre of the
+    ``bounds`` hold for the current (last) leg: R at the latest bearing time, its K and
+    V. ``leg_bounds[j]`` bounds course and speed of the earlier leg j (its range
+    interval is not used: R refers to the current time); missing or None: free.
+    Parameterisation p = (B, R, K_0, V_0, ..., K_L-1, V_L-1): the target sits at range
+    R on bearing B from the own position at the latest bearing time, leg j moves with
+    speed V_j on course K_j; box bounds go to scipy's trust-region reflective least
+    squares. Starts: the TMA solution clipped into the bounds and the centre of the
     bounds; the lower cost wins. P is the unconstrained (H'WH)^-1 at the solution.
     """
     t = np.asarray(t, float)
@@ -112,17 +143,22 @@ def solve_ctma(
     oc = own_xy[m]
     Tc = leg_times(np.array([t[m]]), t0, legs)[0]
     L = Tc.size
+    per_leg = (list(leg_bounds) + [None] * L)[:L - 1] + [bounds]  # 003 claim 9: own bounds per leg
+    i = np.arange(L)
 
     def to_beta(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        b, r, k, v = p[:4]
-        vel = np.concatenate((p[4:], [v * np.sin(k), v * np.cos(k)]))
+        b, r = p[:2]
+        k, v = p[2::2], p[3::2]
+        s, c = np.sin(k), np.cos(k)
+        vel = np.ravel(np.column_stack((v * s, v * c)))
         beta = np.concatenate(([oc[0] + r * np.sin(b) - vel[0::2] @ Tc, oc[1] + r * np.cos(b) - vel[1::2] @ Tc], vel))
         D = np.zeros((beta.size, p.size))
         D[0, :2] = r * np.cos(b), np.sin(b)
         D[1, :2] = -r * np.sin(b), np.cos(b)
-        D[-2, 2:4] = v * np.cos(k), np.sin(k)
-        D[-1, 2:4] = -v * np.sin(k), np.cos(k)
-        D[2:-2, 4:] = np.eye(2 * (L - 1))
+        D[2 + 2 * i, 2 + 2 * i] = v * c
+        D[2 + 2 * i, 3 + 2 * i] = s
+        D[3 + 2 * i, 2 + 2 * i] = -v * s
+        D[3 + 2 * i, 3 + 2 * i] = c
         D[0] -= Tc @ D[2::2]
         D[1] -= Tc @ D[3::2]
         return beta, D
@@ -134,21 +170,29 @@ def solve_ctma(
         beta, D = to_beta(p)
         return weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)[1] @ D
 
-    w = bounds.course_width
-    full = w >= TWO_PI
     lb = np.full(2 + 2 * L, -np.inf)
     ub = np.full(2 + 2 * L, np.inf)
     lb[1], ub[1] = bounds.r_min, bounds.r_max
-    lb[3], ub[3] = bounds.v_min, bounds.v_max
-    if not full:
-        lb[2], ub[2] = bounds.k_min, bounds.k_min + w
+    lb[3::2] = 0.0
     x_s, _ = start.state_at(t[m])
-    r_s, k_s, v_s = rkv(x_s, oc)
-    k_s = k_s if full else _course_into(k_s, bounds)
+    r_s = float(np.hypot(x_s[0] - oc[0], x_s[1] - oc[1]))
+    k_s = np.arctan2(start.beta[2::2], start.beta[3::2])
+    v_s = np.hypot(start.beta[2::2], start.beta[3::2])
+    k_c, v_c = k_s.copy(), v_s.copy()
+    for j, b in enumerate(per_leg):
+        if b is None:
+            continue
+        lb[3 + 2 * j], ub[3 + 2 * j] = b.v_min, b.v_max
+        v_c[j] = 0.5 * (b.v_min + b.v_max)
+        if b.course_width < TWO_PI:
+            lb[2 + 2 * j], ub[2 + 2 * j] = b.k_min, b.k_min + b.course_width
+            k_s[j] = _course_into(k_s[j], b)
+            k_c[j] = b.k_min + 0.5 * b.course_width
+    kv_s = np.ravel(np.column_stack((k_s, v_s)))
+    kv_c = np.ravel(np.column_stack((k_c, v_c)))
     starts = [
-        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s, k_s, v_s], start.beta[2:-2])),
-        np.concatenate(([brg[m], np.sqrt(bounds.r_min * bounds.r_max), bounds.k_min + 0.5 * w,
-                         0.5 * (bounds.v_min + bounds.v_max)], start.beta[2:-2])),
+        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s], kv_s)),
+        np.concatenate(([brg[m], np.sqrt(bounds.r_min * bounds.r_max)], kv_c)),
     ]
     fin_lb, fin_ub = np.isfinite(lb), np.isfinite(ub)
     span = np.where(fin_lb & fin_ub, ub - lb, 0.0)
