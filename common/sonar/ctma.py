@@ -283,7 +283,15 @@ class CycleOutput:
 
 
 class TmaTracker:
-    """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3)."""
+    """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3).
+
+    ``bounds`` are those of the current target leg; the error handling corrects them and
+    a bounds message replaces them. When a leg is added at a manoeuvre time T_A (002
+    claim 13), the earlier leg keeps in ``leg_bounds`` the bounds in force after the last
+    cycle at or before T_A (the original ones: corrections made after T_A fitted one leg
+    to a manoeuvring target) and the new leg gets :func:`new_leg_bounds` of the current
+    ones (003 claim 9). Falling back to the minimal bounds replaces those of every leg.
+    """
 
     def __init__(self, bounds: Bounds | None = None, config: CtmaParams = CtmaParams()) -> None:
         self.bounds = bounds
@@ -294,6 +302,8 @@ class TmaTracker:
         self.own = np.empty((0, 2))
         self.support: list[Support] = []
         self.legs: tuple[float, ...] = ()
+        self.leg_bounds: tuple[Bounds | None, ...] = ()
+        self.bounds_hist: list[tuple[float, Bounds | None]] = []
         self.t0: float | None = None
         self.tma: TmaSolution | None = None
         self.detector = ConvergenceDetector(config.roc_window, config.roc_threshold)
@@ -334,7 +344,10 @@ class TmaTracker:
         phase = self.detector.update(tc, oc, tma.state_at(tc)[0] if tma.converged else None)
         if self.cfg.detect_manoeuvres and phase == "post":
             tma = self._manoeuvre(tma)
-        return self._constrain(tma, tc, oc, phase)
+        out = self._constrain(tma, tc, oc, phase)
+        if self.cfg.detect_manoeuvres:
+            self.bounds_hist.append((tc, self.bounds))
+        return out
 
     def _manoeuvre(self, tma: TmaSolution) -> TmaSolution:
         """Add a leg when the residuals reject the current legs (002 claim 13)."""
@@ -346,6 +359,11 @@ class TmaTracker:
         if ta is None:
             return tma
         self.legs = self.legs + (ta,)
+        k = max(0, sum(tb <= ta for tb, _ in self.bounds_hist) - 1)
+        self.leg_bounds = self.leg_bounds + (self.bounds_hist[k][1] if self.bounds_hist else self.bounds,)  # 003 claim 9
+        self.bounds_hist = self.bounds_hist[k:]
+        if self.bounds is not None:
+            self.bounds = new_leg_bounds(self.bounds)
         self.tma = self._solve_tma()
         return self.tma
 
@@ -356,12 +374,16 @@ class TmaTracker:
         return CycleOutput(tc, *map(float, x), P, r, k, v, constrained, self.bounds, modified, phase, q,
                            self.legs, self.detector.roc)
 
+    def _inside(self, tma: TmaSolution, rkv_t: tuple[float, float, float]) -> bool:
+        """The TMA solution lies in the bounds of every leg (003 claims 2b and 9)."""
+        return self.bounds is None or (self.bounds.contains(*rkv_t) and legs_inside(tma.beta, self.leg_bounds))
+
     def _constrain(self, tma: TmaSolution, tc: float, oc: np.ndarray, phase: str) -> CycleOutput:
         """TMA inside bounds -> TMA; else CTMA, and after convergence the error handling 14."""
         cfg = self.cfg
         x_t, _ = tma.state_at(tc)
         rkv_t = rkv(x_t, oc)
-        if self.bounds is None or self.bounds.contains(*rkv_t):
+        if self._inside(tma, rkv_t):
             self.q_hist.append(1.0)
             self.edge_streak[:] = 0
             return self._output(tma, tc, oc, False, False, phase, 1.0)
@@ -369,7 +391,7 @@ class TmaTracker:
         z = 0
         data = (self.t, self.brg, self.sbrg, self.own, self.t0)
         while True:
-            ctma = solve_ctma(*data, self.bounds, tma, self.support, self.legs)
+            ctma = solve_ctma(*data, self.bounds, tma, self.support, self.legs, self.leg_bounds)
             q = residual_factor(ctma.residuals, tma.residuals, self.sbrg)
             if phase == "pre":
                 self.q_hist.append(q)
@@ -387,7 +409,8 @@ class TmaTracker:
             if z >= cfg.max_corrections:
                 if q > cfg.q_minimal and self.bounds != MINIMAL_BOUNDS:
                     self.bounds, modified = MINIMAL_BOUNDS, True
-                    if self.bounds.contains(*rkv_t):
+                    self.leg_bounds = tuple(None if b is None else MINIMAL_BOUNDS for b in self.leg_bounds)
+                    if self._inside(tma, rkv_t):
                         self.q_hist.append(1.0)
                         self.edge_streak[:] = 0
                         return self._output(tma, tc, oc, False, True, phase, 1.0)
@@ -397,7 +420,7 @@ class TmaTracker:
             self.bounds = recentre(self.bounds, to_fix, r, k, v)
             modified = True
             z += 1
-            if self.bounds.contains(*rkv_t):
+            if self._inside(tma, rkv_t):
                 self.q_hist.append(1.0)
                 self.edge_streak[:] = 0
                 return self._output(tma, tc, oc, False, True, phase, 1.0)

@@ -98,3 +98,28 @@ def test_earlier_leg_course_and_speed_stay_within_original_bounds(runs):
     assert sum(not inside(ORIG, r["tma"][2:4]) for r in runs) >= 3
     assert all(inside(ORIG, r["legs"][2:4]) for r in runs)
     assert not all(inside(ORIG, r["single"][2:4]) for r in runs)
+
+
+def track(bounds: Bounds | None, seed: int) -> tuple[TmaTracker, list]:
+    """A tracker with manoeuvre detection fed the scene in 2-minute batches."""
+    b = BRG + SIG * np.random.default_rng(300 + seed).standard_normal(N)
+    trk = TmaTracker(bounds, CtmaParams(detect_manoeuvres=True))
+    outs = [trk.update(T[i:i + 6], b[i:i + 6], SIG, OWN[i:i + 6]) for i in range(0, N, 6)]
+    return trk, outs
+
+
+@pytest.mark.slow
+def test_tracker_gives_earlier_leg_its_bounds_at_the_manoeuvre_and_frees_the_new_course():
+    err, err_tma, one_leg = [], [], 0
+    for seed in range(RUNS):
+        trk, outs = track(ORIG, seed)
+        assert trk.legs and len(trk.leg_bounds) == len(trk.legs)
+        one_leg += len(trk.legs) == 1 and abs(trk.legs[0] - TA) <= 120.0
+        at_ta = [o.bounds for o in outs if o is not None and o.t <= trk.legs[0]][-1]
+        assert trk.leg_bounds[0] == at_ta and at_ta.course_width == pytest.approx(ORIG.course_width)
+        assert trk.bounds.course_width == TWO_PI
+        err.append(np.hypot(outs[-1].x - X[-1, 0], outs[-1].y - X[-1, 1]))
+        o = track(None, seed)[1][-1]
+        err_tma.append(np.hypot(o.x - X[-1, 0], o.y - X[-1, 1]))
+    assert one_leg >= 18
+    assert rms(err) <= 1.1 * rms(err_tma)
