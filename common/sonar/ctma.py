@@ -9,7 +9,10 @@ Q, edge checks 52 and 54) and correction module 40 (re-centre the violated inter
 most ``max_corrections`` times a cycle, then minimal bounds 75 when Q is high).
 
 R, K, V and the bounds refer to the current time (latest bearing) of each cycle; the
-bounds, the edge checks and the correction are in ``common.sonar.ctma_bounds``.
+bounds, the edge checks and the correction are in ``common.sonar.ctma_bounds``, the
+constrained solve in ``common.sonar.ctma_solve``. With
+target legs each leg has its own course and speed bounds (003 claim 9, paragraph 55);
+the error handling checks and corrects those of the current leg.
 """
 
 from __future__ import annotations
@@ -18,12 +21,10 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.special import chdtri
 
 from common.sonar.ctma_bounds import (
     MINIMAL_BOUNDS,
-    TWO_PI,
     Bounds,
     edge_flags,
     effective_bounds,
@@ -31,15 +32,8 @@ from common.sonar.ctma_bounds import (
     rkv,
     state_bounds,
 )
-from common.sonar.tma import (
-    Support,
-    TmaSolution,
-    covariance,
-    detect_manoeuvre,
-    leg_times,
-    solve_tma,
-    weighted_system,
-)
+from common.sonar.ctma_solve import legs_inside, new_leg_bounds, solve_ctma
+from common.sonar.tma import Support, TmaSolution, detect_manoeuvre, solve_tma
 
 
 @dataclass(frozen=True)
@@ -56,7 +50,8 @@ class CtmaParams:
         spread of the estimated range below which the solution is "post" (003 Fig. 6).
     tma_tol, max_iter: Gauss-Newton stop rule of 002 claim 17 (||Delta p|| in m) and
         the iteration cap.
-    detect_manoeuvres: run the residual-based manoeuvre detector after convergence.
+    detect_manoeuvres: run the residual-based manoeuvre detector after convergence; a
+        new leg gets its own bounds (course free), the earlier one keeps its (003 claim 9).
     manoeuvre_p_false: false alarm probability of that detector (Bonferroni-corrected).
     """
 
@@ -73,96 +68,6 @@ class CtmaParams:
     max_iter: int = 50
     detect_manoeuvres: bool = False
     manoeuvre_p_false: float = 1e-3
-
-
-def _course_into(k: float, b: Bounds) -> float:
-    """Course unwrapped into [k_min, k_min + width], clipped to the nearer edge if outside."""
-    w = b.course_width
-    d = (k - b.k_min) % TWO_PI
-    if d > w:
-        d = w if d - w < TWO_PI - d else 0.0
-    return b.k_min + d
-
-
-def solve_ctma(
-    t: np.ndarray,
-    brg: np.ndarray,
-    sbrg: np.ndarray | float,
-    own_xy: np.ndarray,
-    t0: float,
-    bounds: Bounds,
-    start: TmaSolution,
-    support: Sequence[Support] = (),
-    legs: Sequence[float] = (),
-) -> TmaSolution:
-    """Constrained TMA: bearing least squares with R, K, V of the current leg bounded (003 claim 1).
-
-    Parameterisation p = (B, R, K, V, Vx_j, Vy_j of earlier legs): the target sits at
-    range R on bearing B from the own position at the latest bearing time and moves with
-    speed V on course K; box bounds on (R, K, V) go to scipy's trust-region reflective
-    least squares. Starts: the TMA solution clipped into the bounds and the centre of the
-    bounds; the lower cost wins. P is the unconstrained (H'WH)^-1 at the solution.
-    """
-    t = np.asarray(t, float)
-    brg = np.asarray(brg, float)
-    own_xy = np.asarray(own_xy, float)
-    sb = np.broadcast_to(np.asarray(sbrg, float), t.shape)
-    legs = tuple(legs)
-    m = int(np.argmax(t))
-    oc = own_xy[m]
-    Tc = leg_times(np.array([t[m]]), t0, legs)[0]
-    L = Tc.size
-
-    def to_beta(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        b, r, k, v = p[:4]
-        vel = np.concatenate((p[4:], [v * np.sin(k), v * np.cos(k)]))
-        beta = np.concatenate(([oc[0] + r * np.sin(b) - vel[0::2] @ Tc, oc[1] + r * np.cos(b) - vel[1::2] @ Tc], vel))
-        D = np.zeros((beta.size, p.size))
-        D[0, :2] = r * np.cos(b), np.sin(b)
-        D[1, :2] = -r * np.sin(b), np.cos(b)
-        D[-2, 2:4] = v * np.cos(k), np.sin(k)
-        D[-1, 2:4] = -v * np.sin(k), np.cos(k)
-        D[2:-2, 4:] = np.eye(2 * (L - 1))
-        D[0] -= Tc @ D[2::2]
-        D[1] -= Tc @ D[3::2]
-        return beta, D
-
-    def fun(p: np.ndarray) -> np.ndarray:
-        return -weighted_system(to_beta(p)[0], t, brg, sb, own_xy, t0, support, legs)[0]
-
-    def jac(p: np.ndarray) -> np.ndarray:
-        beta, D = to_beta(p)
-        return weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)[1] @ D
-
-    w = bounds.course_width
-    full = w >= TWO_PI
-    lb = np.full(2 + 2 * L, -np.inf)
-    ub = np.full(2 + 2 * L, np.inf)
-    lb[1], ub[1] = bounds.r_min, bounds.r_max
-    lb[3], ub[3] = bounds.v_min, bounds.v_max
-    if not full:
-        lb[2], ub[2] = bounds.k_min, bounds.k_min + w
-    x_s, _ = start.state_at(t[m])
-    r_s, k_s, v_s = rkv(x_s, oc)
-    k_s = k_s if full else _course_into(k_s, bounds)
-    starts = [
-        np.concatenate(([np.arctan2(x_s[0] - oc[0], x_s[1] - oc[1]), r_s, k_s, v_s], start.beta[2:-2])),
-        np.concatenate(([brg[m], np.sqrt(bounds.r_min * bounds.r_max), bounds.k_min + 0.5 * w,
-                         0.5 * (bounds.v_min + bounds.v_max)], start.beta[2:-2])),
-    ]
-    fin_lb, fin_ub = np.isfinite(lb), np.isfinite(ub)
-    span = np.where(fin_lb & fin_ub, ub - lb, 0.0)
-    best = None
-    for x0 in starts:
-        x0 = np.where(fin_lb, np.maximum(x0, lb + 1e-6 * span + 1e-9), x0)
-        x0 = np.where(fin_ub, np.minimum(x0, ub - 1e-6 * span - 1e-9), x0)
-        res = least_squares(fun, x0, jac=jac, bounds=(lb, ub), method="trf", x_scale="jac", max_nfev=200)
-        if best is None or res.cost < best.cost:
-            best = res
-    beta, _ = to_beta(best.x)
-    d, Hw, r = weighted_system(beta, t, brg, sb, own_xy, t0, support, legs)
-    return TmaSolution(beta, covariance(Hw), float(t0), legs, r, float(d @ d), int(best.nfev), bool(best.status > 0),
-                       float(t[m]))
 
 
 def residual_factor(ctma_res: np.ndarray, tma_res: np.ndarray, sbrg: np.ndarray | float) -> float:
@@ -239,7 +144,15 @@ class CycleOutput:
 
 
 class TmaTracker:
-    """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3)."""
+    """Per-track TMA/CTMA processor: one :meth:`update` per new bearing batch (003 claims 1-3).
+
+    ``bounds`` are those of the current target leg; the error handling corrects them and
+    a bounds message replaces them. When a leg is added at a manoeuvre time T_A (002
+    claim 13), the earlier leg keeps in ``leg_bounds`` the bounds in force after the last
+    cycle at or before T_A (the original ones: corrections made after T_A fitted one leg
+    to a manoeuvring target) and the new leg gets :func:`new_leg_bounds` of the current
+    ones (003 claim 9). Falling back to the minimal bounds replaces those of every leg.
+    """
 
     def __init__(self, bounds: Bounds | None = None, config: CtmaParams = CtmaParams()) -> None:
         self.bounds = bounds
@@ -250,6 +163,8 @@ class TmaTracker:
         self.own = np.empty((0, 2))
         self.support: list[Support] = []
         self.legs: tuple[float, ...] = ()
+        self.leg_bounds: tuple[Bounds | None, ...] = ()
+        self.bounds_hist: list[tuple[float, Bounds | None]] = []
         self.t0: float | None = None
         self.tma: TmaSolution | None = None
         self.detector = ConvergenceDetector(config.roc_window, config.roc_threshold)
@@ -290,7 +205,10 @@ class TmaTracker:
         phase = self.detector.update(tc, oc, tma.state_at(tc)[0] if tma.converged else None)
         if self.cfg.detect_manoeuvres and phase == "post":
             tma = self._manoeuvre(tma)
-        return self._constrain(tma, tc, oc, phase)
+        out = self._constrain(tma, tc, oc, phase)
+        if self.cfg.detect_manoeuvres:
+            self.bounds_hist.append((tc, self.bounds))
+        return out
 
     def _manoeuvre(self, tma: TmaSolution) -> TmaSolution:
         """Add a leg when the residuals reject the current legs (002 claim 13)."""
@@ -302,6 +220,11 @@ class TmaTracker:
         if ta is None:
             return tma
         self.legs = self.legs + (ta,)
+        k = max(0, sum(tb <= ta for tb, _ in self.bounds_hist) - 1)
+        self.leg_bounds = self.leg_bounds + (self.bounds_hist[k][1] if self.bounds_hist else self.bounds,)  # 003 claim 9
+        self.bounds_hist = self.bounds_hist[k:]
+        if self.bounds is not None:
+            self.bounds = new_leg_bounds(self.bounds)
         self.tma = self._solve_tma()
         return self.tma
 
@@ -312,12 +235,16 @@ class TmaTracker:
         return CycleOutput(tc, *map(float, x), P, r, k, v, constrained, self.bounds, modified, phase, q,
                            self.legs, self.detector.roc)
 
+    def _inside(self, tma: TmaSolution, rkv_t: tuple[float, float, float]) -> bool:
+        """The TMA solution lies in the bounds of every leg (003 claims 2b and 9)."""
+        return self.bounds is None or (self.bounds.contains(*rkv_t) and legs_inside(tma.beta, self.leg_bounds))
+
     def _constrain(self, tma: TmaSolution, tc: float, oc: np.ndarray, phase: str) -> CycleOutput:
         """TMA inside bounds -> TMA; else CTMA, and after convergence the error handling 14."""
         cfg = self.cfg
         x_t, _ = tma.state_at(tc)
         rkv_t = rkv(x_t, oc)
-        if self.bounds is None or self.bounds.contains(*rkv_t):
+        if self._inside(tma, rkv_t):
             self.q_hist.append(1.0)
             self.edge_streak[:] = 0
             return self._output(tma, tc, oc, False, False, phase, 1.0)
@@ -325,7 +252,7 @@ class TmaTracker:
         z = 0
         data = (self.t, self.brg, self.sbrg, self.own, self.t0)
         while True:
-            ctma = solve_ctma(*data, self.bounds, tma, self.support, self.legs)
+            ctma = solve_ctma(*data, self.bounds, tma, self.support, self.legs, self.leg_bounds)
             q = residual_factor(ctma.residuals, tma.residuals, self.sbrg)
             if phase == "pre":
                 self.q_hist.append(q)
@@ -343,7 +270,8 @@ class TmaTracker:
             if z >= cfg.max_corrections:
                 if q > cfg.q_minimal and self.bounds != MINIMAL_BOUNDS:
                     self.bounds, modified = MINIMAL_BOUNDS, True
-                    if self.bounds.contains(*rkv_t):
+                    self.leg_bounds = tuple(None if b is None else MINIMAL_BOUNDS for b in self.leg_bounds)
+                    if self._inside(tma, rkv_t):
                         self.q_hist.append(1.0)
                         self.edge_streak[:] = 0
                         return self._output(tma, tc, oc, False, True, phase, 1.0)
@@ -353,7 +281,7 @@ class TmaTracker:
             self.bounds = recentre(self.bounds, to_fix, r, k, v)
             modified = True
             z += 1
-            if self.bounds.contains(*rkv_t):
+            if self._inside(tma, rkv_t):
                 self.q_hist.append(1.0)
                 self.edge_streak[:] = 0
                 return self._output(tma, tc, oc, False, True, phase, 1.0)

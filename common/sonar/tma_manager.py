@@ -283,7 +283,9 @@ class TmaManager:
         """Apply a decoded bounds message; returns the tracks changed.
 
         Without ``track``: the array's default for new tracks and every live track; with
-        it: that live track only (unknown track: Rejected).
+        it: that live track only (unknown track: Rejected). The bounds are those of the
+        track's current target leg: after a manoeuvre they bound the new leg, and the
+        earlier legs keep the bounds they had (003 claim 9), so the message needs no leg.
         """
         b = make_bounds(msg)
         tid = msg.get("track")
