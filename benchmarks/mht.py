@@ -23,7 +23,7 @@ association: nearest confirmed track within 5 sigma = 5 deg, sigma 1 deg):
   false   confirmed track numbers never within 5 deg of a truth while confirmed, per
           100 cycles;
   RMSE    bearing error of the associated confirmed tracks (deg);
-  retro   (MHT) RMSE of the retrodicted register (sonar/history) against the filtered
+  retro   (MHT) RMSE of the retrodicted bearings (sonar/history brg_retro) against the filtered
           estimates of the same tracks and times, over the register rows of tracks
           associated with a truth, leaving out the last n_retro cycles of each run.
 Goals (exit 1 when one fails, MHT only; GNN is shown for comparison): no swap in any
@@ -244,7 +244,7 @@ def _retro_errors(trk: MhtTracker, ids: set[int], filt: dict[tuple[int, float], 
         h = trk.history_of(i)
         if h is None:
             continue
-        for t, b in zip(h[1]["t"].tolist(), h[1]["brg"].tolist()):
+        for t, b in zip(h[1]["t_retro"].tolist(), h[1]["brg_retro"].tolist()):
             if t > t_end or (i, t) not in filt or truth_at[t][1].size == 0:
                 continue
             tb = truth_at[t][1]
