@@ -31,11 +31,13 @@ from common.deploy.deployment import (
     Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
 )
 from common.bus.launcher import Forked
+from common.bus.liveliness import Drain
 from common.bus.procs import child_env
 
 STOP_TIMEOUT_S = 5.0
 POLL_S = 0.1
 LISTEN_TIMEOUT_S = 30.0
+DRAIN_TIMEOUT_S = 120.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -51,7 +53,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--wait-alive", action="append", default=[], metavar="SERVICE/INSTANCE",
                    help="the simulator also waits for this liveliness token (repeatable)")
     p.add_argument("--exit-after-sim", type=float, default=None, metavar="SECONDS",
-                   help="stop everything this long after the simulator is done")
+                   help="stop everything this long after the simulator is done and every "
+                        "service has drained its input (its metrics: two reports in a row "
+                        f"with nothing new), or {DRAIN_TIMEOUT_S:.0f} s after the simulator "
+                        "if they never drain")
 
 
 class Log:
@@ -223,8 +228,16 @@ def main(args: argparse.Namespace) -> int:
         sim = Supervised(simulator_spec(args.config, args.with_simulator, args.seed, args.speed,
                                         names, connect), log, restart=False)
         sim.start()
-    code = supervise([*([router] if router else []), *services], sim, args.exit_after_sim,
-                     stop, log)
+    drain: Drain | None = None
+    if sim is not None and args.exit_after_sim is not None:
+        drain = Drain(dataclasses.replace(cfg.zenoh, connect=connect or cfg.zenoh.connect),
+                      [s.spec.alive for s in services])
+    try:
+        code = supervise([*([router] if router else []), *services], sim, args.exit_after_sim,
+                         stop, log, drain)
+    finally:
+        if drain is not None:
+            drain.close()
     stop_all([*([sim] if sim else []), *services], log)
     if router is not None:
         stop_all([router], log)
@@ -233,10 +246,12 @@ def main(args: argparse.Namespace) -> int:
 
 
 def supervise(children: list[Supervised], sim: Supervised | None, exit_after_sim: float | None,
-              stop: threading.Event, log: Log) -> int:
+              stop: threading.Event, log: Log, drain: Drain | None = None) -> int:
     """Restart crashed children until ``stop`` (or ``exit_after_sim`` seconds after the
-    simulator ended); returns 1 if the simulator failed, else 0."""
+    simulator ended and ``drain`` says the services have worked through their input);
+    returns 1 if the simulator failed, else 0."""
     sim_done_at: float | None = None
+    drained_at: float | None = None
     code = 0
     while not stop.wait(POLL_S):
         now = time.monotonic()
@@ -248,7 +263,18 @@ def supervise(children: list[Supervised], sim: Supervised | None, exit_after_sim
                 sim_done_at = now
                 code = 0 if sim.returncode == 0 else 1
                 log.line("run", "simulator done" if code == 0 else "simulator failed")
-        if exit_after_sim is not None and sim_done_at is not None \
-                and now - sim_done_at >= exit_after_sim:
+                if drain is not None:
+                    drain.mark()
+        if exit_after_sim is None or sim_done_at is None:
+            continue
+        if drained_at is None:
+            if drain is None or drain.drained():
+                drained_at = now
+                log.line("run", "services drained")
+            elif now - sim_done_at >= DRAIN_TIMEOUT_S:
+                drained_at = now
+                log.line("run", f"services not drained {DRAIN_TIMEOUT_S:.0f} s after the "
+                                "simulator: stopping anyway")
+        if drained_at is not None and now - drained_at >= exit_after_sim:
             break
     return code

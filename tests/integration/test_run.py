@@ -181,7 +181,7 @@ def test_run_with_router_and_simulator_delivers_every_service_output() -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     run = Run("--config", TWO_TARGETS, "--connect", endpoint, "--with-router",
               "--with-simulator", TWO_TARGETS, "--wait-alive", "test/collector",
-              "--exit-after-sim", "3")
+              "--exit-after-sim", "1")
     keys = output_keys()
     col = Collector(endpoint, ["radar/**", "sim/status"])
     try:

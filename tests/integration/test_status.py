@@ -9,7 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from common.bus.liveliness import Drain
 from common.bus.procs import pfusion_argv
+from common.deploy.config import ZenohConfig
+from common.wire import protocol
 from services.status.main import table
 from tests.harness import ROOT, SCENARIOS, Deployment
 
@@ -79,3 +82,43 @@ def test_status_watch_refreshes_until_interrupted(tmp_path: Path) -> None:
         proc.send_signal(signal.SIGINT)
         assert proc.wait(15) == 0
         assert all(h.split()[1:] == ["1", "live", "under", ROOT] for h in headers)
+
+
+def test_drain_needs_two_quiet_reports_from_every_expected_service(tmp_path: Path) -> None:
+    """``pfusion run --exit-after-sim`` stops only once every service has drained: two
+    metrics reports in a row with the same input count and an empty queue; an instance
+    ``*`` is matched by any instance, and a service that never reports keeps it waiting."""
+    def report(service: str, instance: str, n_in: int, queue: int = 0) -> None:
+        d.session.put(f"{ROOT}/metrics/{service}/{instance}",
+                      protocol.encode({"service": service, "instance": instance,
+                                       "in": n_in, "queue": queue}))
+
+    def settled() -> bool:
+        time.sleep(0.3)
+        return drain.drained()
+
+    with Deployment(tmp_path) as d:
+        drain = Drain(ZenohConfig([d.endpoint], [], ROOT), ["plotter/b1", "fusion/*"])
+        try:
+            time.sleep(0.5)
+            report("plotter", "b1", 5)
+            report("plotter", "b1", 5)
+            drain.mark()
+            report("plotter", "b1", 7)
+            report("fusion", "main", 3)
+            report("plotter", "b1", 7)
+            report("fusion", "main", 4)
+            assert not settled()  # fusion's input still grows
+            report("fusion", "main", 4, queue=2)
+            assert not settled()  # fusion has a backlog
+            report("fusion", "main", 6)
+            report("fusion", "main", 6)
+            assert settled()
+            report("plotter", "b1", 8)
+            assert not settled()  # a later input undoes it
+            drain.mark()
+            report("plotter", "b1", 8)
+            report("plotter", "b1", 8)
+            assert not settled()  # fusion has not reported since the mark
+        finally:
+            drain.close()
