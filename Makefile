@@ -13,8 +13,10 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/pfusion demo --view
 
+# one BLAS/OpenMP thread per process: every service and test worker is its own process,
+# and a pool sized for the host's CPUs would spin against its peers on a 2-core quota
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist worksteal --durations=15 tests
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(PY) -m pytest -q -n 2 --dist worksteal --durations=25 tests
 
 bench: $(STAMP)
 	$(PY) benchmarks/core.py
