@@ -13,18 +13,12 @@ global tracks and every service's counters are seen, then each terminal gets its
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
-import signal
 import socket
 import subprocess
 import sys
-import threading
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import IO
 
 import pytest
 
@@ -32,10 +26,9 @@ from common.bus.transport import free_port
 from common.cli import COMMANDS
 from common.deploy.config import load
 from common.deploy.deployment import plan
+from tests.harness import REPO, TIMEOUT_S, Terminal
 
-REPO = Path(__file__).resolve().parents[2]
 CONFIG = "scenarios/two_targets.toml"
-TIMEOUT_S = 120.0
 
 
 def readme_session() -> list[list[str]]:
@@ -63,49 +56,6 @@ def config_on(tmp: Path, endpoint: str) -> Path:
     path = tmp / "two_targets.toml"
     path.write_text(text.replace("\n[zenoh]\n", f'\n[zenoh]\nconnect = ["{endpoint}"]\n'))
     return path
-
-
-class Terminal:
-    """One command in its own process; stdout and stderr lines kept as they come."""
-
-    def __init__(self, argv: list[str]) -> None:
-        self.proc = subprocess.Popen(argv, cwd=REPO, stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        self.out: list[str] = []
-        self.err: list[str] = []
-        assert self.proc.stdout is not None and self.proc.stderr is not None
-        self._readers = [threading.Thread(target=self._read, args=(s, lines), daemon=True)
-                         for s, lines in ((self.proc.stdout, self.out), (self.proc.stderr, self.err))]
-        for r in self._readers:
-            r.start()
-
-    @staticmethod
-    def _read(stream: IO[bytes], lines: list[str]) -> None:
-        for raw in stream:
-            lines.append(raw.decode(errors="replace").rstrip("\n"))
-
-    def wait_for(self, what: str, predicate: Callable[[], bool], timeout: float = TIMEOUT_S) -> None:
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            assert time.monotonic() < deadline, f"timed out waiting for {what}\n{self.log()}"
-            assert self.proc.poll() is None, f"exited with {self.proc.returncode}\n{self.log()}"
-            time.sleep(0.1)
-
-    def ctrl_c(self, timeout: float = 30.0) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            code = self.proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            raise
-        for r in self._readers:
-            r.join(5)
-        return code
-
-    def log(self) -> str:
-        return "\n".join([*self.out[-20:], *self.err[-40:]])
 
 
 def status_rows(argv: list[str]) -> dict[str, list[str]]:

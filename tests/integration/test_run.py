@@ -6,9 +6,6 @@ from __future__ import annotations
 import os
 import re
 import signal
-import subprocess
-import threading
-import time
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +19,7 @@ from common.deploy.config import ConfigError, ZenohConfig, load, parse
 from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
 from common.bus.procs import pfusion_argv
 from common.wire.protocol import kind_of
+from tests.harness import Terminal
 
 REPO = Path(__file__).resolve().parents[2]
 TWO_TARGETS = str(REPO / "scenarios" / "two_targets.toml")
@@ -85,21 +83,12 @@ def test_router_endpoint_choice() -> None:
     assert loopback_port("tcp/router:7447") is None
 
 
-class Run:
+class Run(Terminal):
     """``pfusion run`` as a subprocess; its stderr lines are kept (and the started pids)."""
 
     def __init__(self, *args: str) -> None:
-        self.proc = subprocess.Popen(pfusion_argv("run", *args), stderr=subprocess.PIPE,
-                                     stdout=subprocess.DEVNULL,
-                                     env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        self.lines: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        assert self.proc.stderr is not None
-        for raw in self.proc.stderr:
-            self.lines.append(raw.decode(errors="replace").rstrip("\n"))
+        super().__init__(pfusion_argv("run", *args))
+        self.lines = self.err
 
     def pids(self, name: str) -> list[int]:
         pat = re.compile(rf"^\[run\] started {re.escape(name)} pid=(\d+)$")
@@ -109,15 +98,7 @@ class Run:
         return "\n".join(self.lines[-60:])
 
     def stop(self, timeout: float = 20.0) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            code = self.proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            raise
-        self._reader.join(5)
-        return code
+        return self.ctrl_c(timeout)
 
 
 class Collector:
@@ -140,13 +121,6 @@ class Collector:
     def of(self, suffix: str) -> list[dict[str, Any]]:
         self.drain()
         return [m for k, m in self.messages if k == f"{ROOT}/{suffix}"]
-
-    def wait_for(self, what: str, predicate: Any, run: Run, timeout: float = 60.0) -> None:
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            assert time.monotonic() < deadline, f"timed out waiting for {what}\n{run.log()}"
-            assert run.proc.poll() is None, f"run exited with {run.proc.returncode}\n{run.log()}"
-            time.sleep(0.1)
 
     def close(self) -> None:
         for s in self.subs:
@@ -185,10 +159,10 @@ def test_run_with_router_and_simulator_delivers_every_service_output() -> None:
     keys = output_keys()
     col = Collector(endpoint, ["radar/**", "sim/status"])
     try:
-        col.wait_for("sim/status done", lambda: col.of("sim/status"), run)
+        run.wait_for("sim/status done", lambda: col.of("sim/status"))
         last_t = col.of("sim/status")[0]["t"]
-        col.wait_for("every output of the last scan",
-                     lambda: all(any(m["t"] == last_t for m in col.of(k)) for k in keys), run)
+        run.wait_for("every output of the last scan",
+                     lambda: all(any(m["t"] == last_t for m in col.of(k)) for k in keys))
         assert run.proc.wait(30) == 0, run.log()
     finally:
         col.close()
@@ -212,15 +186,15 @@ def test_run_restarts_a_killed_service_and_its_output_resumes() -> None:
               "--with-simulator", TWO_TARGETS, "--speed", "5", "--wait-alive", "test/collector")
     col = Collector(endpoint, ["radar/etracks/b1", "sim/status"])
     try:
-        col.wait_for("etracks of b1", lambda: len(col.of("radar/etracks/b1")) >= 10, run)
+        run.wait_for("etracks of b1", lambda: len(col.of("radar/etracks/b1")) >= 10)
         [pid] = run.pids("elementary-tracker/b1")
         os.kill(pid, signal.SIGKILL)
         killed_at = col.of("radar/etracks/b1")[-1]["t"]
-        col.wait_for("the restart", lambda: len(run.pids("elementary-tracker/b1")) == 2, run)
+        run.wait_for("the restart", lambda: len(run.pids("elementary-tracker/b1")) == 2)
         assert any(re.match(r"\[run\] elementary-tracker/b1 exited with code -9 after .*"
                             r"restarting in 0.5 s", line) for line in run.lines), run.log()
-        col.wait_for("etracks of b1 after the restart",
-                     lambda: col.of("radar/etracks/b1")[-1]["t"] >= killed_at + 5, run)
+        run.wait_for("etracks of b1 after the restart",
+                     lambda: col.of("radar/etracks/b1")[-1]["t"] >= killed_at + 5)
         assert not col.of("sim/status"), "the simulator ended before the restart was seen"
     finally:
         col.close()
