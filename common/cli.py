@@ -155,7 +155,3 @@ def main(argv: list[str] | None = None) -> int:
     except _zenoh_error() as e:
         print(f"pfusion {pre.command}: {one_line(e)}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -21,7 +21,7 @@ from multiprocessing.context import ForkServerContext
 from pathlib import Path
 from typing import IO
 
-ENTRY = "common.cli"  # the module that ``python -m`` runs as ``pfusion`` (procs.pfusion_argv)
+ENTRY = "common.cli"  # the module of ``pfusion``'s main and COMMANDS (``python -m common`` runs it)
 SUPERVISORS = ("run", "demo")  # commands that start processes of their own: never forked
 
 

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 from typing import IO
 
-from common.bus.launcher import ENTRY, SUPERVISORS, Forked
+from common.bus.launcher import SUPERVISORS, Forked
 from common.bus.transport import free_port, wait_port
 
 # Zenoh's own warnings and errors (a link closed, a lease expired) in each child's log,
@@ -27,7 +27,7 @@ def child_env() -> dict[str, str]:
 
 def pfusion_argv(*args: str) -> list[str]:
     """argv that runs ``pfusion ARGS`` with this interpreter."""
-    return [sys.executable, "-m", ENTRY, *args]
+    return [sys.executable, "-m", "common", *args]
 
 
 class Child:

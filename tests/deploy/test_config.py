@@ -95,7 +95,7 @@ def test_defaults() -> None:
 
 def test_cli_exits_2_with_key_named(tmp_path: Path) -> None:
     bad = write(tmp_path, GOOD.replace("p = 1", "p = -1"))
-    r = subprocess.run([sys.executable, "-m", "common.cli", "simulate", "--config", str(bad),
+    r = subprocess.run([sys.executable, "-m", "common", "simulate", "--config", str(bad),
                         "--scenario", str(bad)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2
     assert "radar.base[0].p" in r.stderr

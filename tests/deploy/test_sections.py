@@ -49,7 +49,7 @@ def test_unknown_tables_and_keys_are_errors(doc: dict, key: str) -> None:
 def test_service_refuses_misspelt_table_with_exit_2(tmp_path: Path) -> None:
     cfg = tmp_path / "bad.toml"
     cfg.write_text((REPO / "scenarios" / "two_targets.toml").read_text() + "\n[radar.trackr]\nx = 1\n")
-    r = subprocess.run([sys.executable, "-m", "common.cli", "elementary-tracker", "--config", str(cfg),
+    r = subprocess.run([sys.executable, "-m", "common", "elementary-tracker", "--config", str(cfg),
                         "--base", "b1"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "radar.trackr" in r.stderr
 

@@ -21,7 +21,7 @@ def png_size(path: Path) -> tuple[int, int]:
 
 @pytest.mark.slow
 def test_demo_runs_everything_and_draws(tmp_path: Path) -> None:
-    r = subprocess.run([sys.executable, "-m", "common.cli", "demo", "--out", str(tmp_path)],
+    r = subprocess.run([sys.executable, "-m", "common", "demo", "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=240)
     assert r.returncode == 0, r.stdout + r.stderr[-3000:]
     out = r.stdout
