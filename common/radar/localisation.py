@@ -141,16 +141,43 @@ def _box(
 
 
 def _keep(
-    pos: np.ndarray, diag: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float
+    pos: np.ndarray, h: np.ndarray, V: np.ndarray, c: Constraints, k: float, z_min: float,
+    z_max: float,
 ) -> np.ndarray:
-    """Blocks (centres (M, 3), half-diagonals (M,)) that may hold a point within k sigma
-    of every valid measurement and inside [z_min, z_max]; |grad r_b| <= 2 and
-    |grad theta| <= 1 / rho bound the spread of a block (diag = 0: centre test)."""
-    res_rb, res_az, rho = residuals(pos, c)
+    """Blocks (centres (M, 3), half-widths h (M, 3) along the axes V (M, 3, 3); h = 0:
+    centre test) that may hold a point within k sigma of every valid measurement and
+    inside [z_min, z_max]. Spread of a block, half-diagonal d: 001's bounds
+    |grad r_b| <= 2 and |grad theta| <= 1 / rho, and with them the tighter Taylor bounds
+    sum_i |g . v_i| h_i + d^2 ||H|| / 2 (g, H: gradient at the centre and bound of the
+    Hessian over the block, ||H|| <= 1 / |x - tx| + 1 / |x - rx| for r_b, 1 / rho^2 for
+    theta, distances shrunk by d): a block that fails them holds no point that passes,
+    so the blocks kept at the last level are the same (tests/radar/
+    test_global_localisation.py checks against an exhaustive evaluation)."""
+    d_t = pos[:, None, :] - c.tx
+    d_r = pos[:, None, :] - c.rx
+    n_t, n_r = np.linalg.norm(d_t, axis=-1), np.linalg.norm(d_r, axis=-1)
+    res_rb = np.abs(c.rb - (n_t + n_r))  # 001 [36], as `residuals`
+    res_az = np.abs(wrap_pi(c.az - np.arctan2(d_r[..., 0], d_r[..., 1])))
+    rho = np.hypot(d_r[..., 0], d_r[..., 1])
+    diag = np.linalg.norm(h, axis=1)
     d = diag[:, None]
-    ok_rb = np.abs(res_rb) <= k * c.srb + 2.0 * d
-    ok_az = np.abs(res_az) <= k * c.saz + d / np.maximum(rho, 1.0)
+    ok_rb = res_rb <= k * c.srb + 2.0 * d
+    ok_az = res_az <= k * c.saz + d / np.maximum(rho, 1.0)
     ok_z = (pos[:, 2] >= z_min - diag) & (pos[:, 2] <= z_max + diag)
+    if diag.any():  # the Taylor bounds, with a margin for their rounding
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g_rb = d_t / n_t[..., None] + d_r / n_r[..., None]
+            g_az = np.stack([d_r[..., 1], -d_r[..., 0], 0.0 * rho], -1) / rho[..., None] ** 2
+            lin_rb = (np.abs(g_rb @ V) @ h[:, :, None])[..., 0]
+            lin_az = (np.abs(g_az @ V) @ h[:, :, None])[..., 0]
+            far_rb = (n_t > d) & (n_r > d)
+            tight_rb = np.where(far_rb, lin_rb + 0.5 * d**2 * (1.0 / (n_t - d) + 1.0 / (n_r - d)),
+                                np.inf)
+            tight_az = np.where(rho > d, lin_az + 0.5 * d**2 / (rho - d) ** 2, np.inf)
+        ok_rb &= res_rb <= k * c.srb + tight_rb + 1e-9 * (n_t + n_r)
+        ok_az &= res_az <= k * c.saz + tight_az + 1e-12
+        s_z = np.abs(V[:, 2, :] * h).sum(axis=1) + 1e-9 * np.abs(pos[:, 2])
+        ok_z &= (pos[:, 2] >= z_min - s_z) & (pos[:, 2] <= z_max + s_z)
     return np.all((ok_rb & ok_az) | ~c.valid, axis=1) & ok_z
 
 
@@ -183,8 +210,8 @@ def block_localise(
         local = _CHILD[None, :, :] * h[:, None, :]  # (M, 8, 3) in the box axes
         pos = (pos[:, None, :] + local @ np.swapaxes(V[owner], 1, 2)).reshape(-1, 3)
         owner = np.repeat(owner, 8)
-        diag = np.repeat(np.linalg.norm(h, axis=1), 8) if level < levels else np.zeros(pos.shape[0])
-        keep = _keep(pos, diag, c.take(owner), k, z_min, z_max)
+        hc = np.repeat(h, 8, axis=0) if level < levels else np.zeros((pos.shape[0], 3))
+        keep = _keep(pos, hc, V[owner], c.take(owner), k, z_min, z_max)
         pos, owner = pos[keep], owner[keep]
     cm = c.take(owner)
     res_rb, res_az, _ = residuals(pos, cm)
