@@ -102,11 +102,11 @@ def gated_pairs(
 def component_gamma(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, y: np.ndarray,
                     R: np.ndarray, tx: np.ndarray, rx: np.ndarray) -> np.ndarray:
     """[48] for aligned pairs of a track's mixture (w (P, K), xc (P, K, 6), Pc
-    (P, K, 6, 6)) and an elementary estimate (y (P, 3), R (P, 3, 3)) of one base: the
-    smallest gamma over the live components (inf if none is live); see
-    `gated_component_pairs` for why per component."""
+    (P, K, 6, 6)) and an elementary estimate (y (P, 3), R (P, 3, 3)) of the base with
+    geometry tx, rx (P, 3) each: the smallest gamma over the live components (inf if
+    none is live); see `gated_component_pairs` for why per component."""
     p, k = np.nonzero(w > 0)
-    y_pred, GPG = projections(xc[p, k], Pc[p, k], tx, rx)
+    y_pred, GPG = projections(xc[p, k], Pc[p, k], tx[p], rx[p])
     best = np.full(w.shape[0], np.inf)
     np.minimum.at(best, p, distance(y_pred, GPG, y[p], R[p]))  # [48]
     return best

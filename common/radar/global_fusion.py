@@ -255,11 +255,10 @@ class GlobalFusion:
         k = b * (1 << 40) + tab.member[s, b]
         r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
         ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
-        for bb in np.unique(b[ok]):
-            sel = np.flatnonzero(ok & (b == bb))
-            gam = component_gamma(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
-                                  self.tx[bb], self.rx[bb])  # [48]
-            ok[sel] = gam <= self.gamma_max
+        sel = np.flatnonzero(ok)  # all bases at once
+        gam = component_gamma(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
+                              self.tx[b[sel]], self.rx[b[sel]])  # [48]
+        ok[sel] = gam <= self.gamma_max
         tab.has[s[~ok], b[~ok]] = False  # dissociation
         row[s[ok], b[ok]] = r[ok]
         return row
