@@ -50,6 +50,7 @@ from scipy.special import erf
 
 from common.core.angles import wrap_pi
 from common.core.imm import gaussian_loglik
+from common.radar.bistatic import norm3
 
 STEP_TOL = 1e-6  # squared step (in posterior sigmas) below which a row stops iterating
 COV_CORRECTION = 1.5  # inverse of the 2/3 variance ratio of the erf weight [37]
@@ -84,7 +85,7 @@ def residuals(pos: np.ndarray, c: Constraints) -> tuple[np.ndarray, np.ndarray, 
     horizontal receiver distance, each (N, K) for positions (N, 3)."""
     d_t = pos[:, None, :] - c.tx
     d_r = pos[:, None, :] - c.rx
-    rb = np.linalg.norm(d_t, axis=-1) + np.linalg.norm(d_r, axis=-1)  # 001 [36]
+    rb = norm3(d_t) + norm3(d_r)  # 001 [36]
     az = np.arctan2(d_r[..., 0], d_r[..., 1])
     return c.rb - rb, wrap_pi(c.az - az), np.hypot(d_r[..., 0], d_r[..., 1])
 
@@ -108,8 +109,8 @@ def gauss_newton(
     for it in range(iterations + 1):
         d_t = x[:, None, :] - c.tx
         d_r = x[:, None, :] - c.rx
-        n_t = np.linalg.norm(d_t, axis=-1, keepdims=True)
-        n_r = np.linalg.norm(d_r, axis=-1, keepdims=True)
+        n_t = norm3(d_t)[..., None]
+        n_r = norm3(d_r)[..., None]
         rho2 = d_r[..., 0] ** 2 + d_r[..., 1] ** 2
         j_rb = (d_t / n_t + d_r / n_r) * (w / c.srb)[..., None]
         j_az = np.zeros_like(j_rb)
@@ -155,11 +156,11 @@ def _keep(
     test_global_localisation.py checks against an exhaustive evaluation)."""
     d_t = pos[:, None, :] - c.tx
     d_r = pos[:, None, :] - c.rx
-    n_t, n_r = np.linalg.norm(d_t, axis=-1), np.linalg.norm(d_r, axis=-1)
+    n_t, n_r = norm3(d_t), norm3(d_r)
     res_rb = np.abs(c.rb - (n_t + n_r))  # 001 [36], as `residuals`
     res_az = np.abs(wrap_pi(c.az - np.arctan2(d_r[..., 0], d_r[..., 1])))
     rho = np.hypot(d_r[..., 0], d_r[..., 1])
-    diag = np.linalg.norm(h, axis=1)
+    diag = norm3(h)
     d = diag[:, None]
     ok_rb = res_rb <= k * c.srb + 2.0 * d
     ok_az = res_az <= k * c.saz + d / np.maximum(rho, 1.0)
@@ -241,7 +242,7 @@ def _predict_meas(pts: np.ndarray, c: Constraints, ref_az: np.ndarray) -> np.nda
     rx = c.rx[None, None] if c.rx.ndim == 2 else c.rx[:, None]
     d_t = pts[:, :, None, :] - tx
     d_r = pts[:, :, None, :] - rx
-    rb = np.linalg.norm(d_t, axis=-1) + np.linalg.norm(d_r, axis=-1)  # 001 [36]
+    rb = norm3(d_t) + norm3(d_r)  # 001 [36]
     az = ref_az[:, None, :] + wrap_pi(np.arctan2(d_r[..., 0], d_r[..., 1]) - ref_az[:, None, :])
     return np.concatenate([rb, az], axis=-1)
 
