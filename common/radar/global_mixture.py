@@ -32,8 +32,11 @@ def predict(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, dt: np.ndarray, A: i
     N, K = mu.shape
     M = K // A
     p = np.repeat(imm.transition(dt, sojourn), A, axis=0)  # (N * A, M, M)
-    c, x0, P0 = imm.mix(mu.reshape(N * A, M), xm.reshape(N * A, M, 6),
-                        Pm.reshape(N * A, M, 6, 6), p)
+    w = mu.reshape(N * A, M)
+    c, x0, P0 = np.zeros((N * A, M)), np.zeros((N * A, M, 6)), np.zeros((N * A, M, 6, 6))
+    band = np.flatnonzero(w.sum(axis=1) > 0)  # a dead band mixes to zeros: left out
+    c[band], x0[band], P0[band] = imm.mix(w[band], xm.reshape(N * A, M, 6)[band],
+                                          Pm.reshape(N * A, M, 6, 6)[band], p[band])
     c, x0, P0 = c.reshape(N, K), x0.reshape(N, K, 6), P0.reshape(N, K, 6, 6)
     ti, ki = np.nonzero(c > 0)
     x0[ti, ki], P0[ti, ki] = global_ekf.predict(x0[ti, ki], P0[ti, ki], dt[ti], q[ki % M], q_z)
