@@ -41,16 +41,22 @@ def _cov(rng: np.random.Generator, n: int) -> np.ndarray:
     return (Q * s[:, None, :] ** 2) @ np.swapaxes(Q, 1, 2)
 
 
-def _keep_001(pos: np.ndarray, h: np.ndarray, V: np.ndarray, c: Constraints, k: float,
-              z_min: float, z_max: float) -> np.ndarray:
-    """The test of 001's bounds alone (|grad r_b| <= 2, |grad theta| <= 1 / rho)."""
-    res_rb, res_az, rho = residuals(pos, c)
-    diag = np.linalg.norm(h, axis=1)
+def _keep_001(pos: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float,
+              h: np.ndarray | None = None, V: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The test of 001's bounds alone (|grad r_b| <= 2, |grad theta| <= 1 / rho), with
+    `_keep`'s signature (blocks (M, J, 3) of the M rows of c)."""
+    M, J, _ = pos.shape
+    rows = np.repeat(np.arange(M), J)
+    res_rb, res_az, rho = residuals(pos.reshape(-1, 3), c.take(rows))
+    diag = np.zeros(M * J) if h is None else np.linalg.norm(h, axis=1)[rows]
     d = diag[:, None]
-    ok_rb = np.abs(res_rb) <= k * c.srb + 2.0 * d
-    ok_az = np.abs(res_az) <= k * c.saz + d / np.maximum(rho, 1.0)
-    ok_z = (pos[:, 2] >= z_min - diag) & (pos[:, 2] <= z_max + diag)
-    return np.all((ok_rb & ok_az) | ~c.valid, axis=1) & ok_z
+    ok_rb = np.abs(res_rb) <= k * c.srb[rows] + 2.0 * d
+    ok_az = np.abs(res_az) <= k * c.saz[rows] + d / np.maximum(rho, 1.0)
+    z = pos.reshape(-1, 3)[:, 2]
+    ok_z = (z >= z_min - diag) & (z <= z_max + diag)
+    ok = np.all((ok_rb & ok_az) | ~c.valid[rows], axis=1) & ok_z
+    return ok.reshape(M, J), np.abs(res_rb).reshape(M, J, -1), np.abs(res_az).reshape(M, J, -1)
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -65,13 +71,11 @@ def test_pruned_blocks_hold_no_passing_point(seed: int) -> None:
     V, _ = np.linalg.qr(rng.standard_normal((n, 3, 3)))
     h = np.exp(rng.uniform(np.log(5.0), np.log(4e3), (n, 3)))
     centre = truth + rng.standard_normal((n, 3)) * 3.0 * h
-    kept = localisation._keep(centre, h, V, c, K_SIGMA, 0.0, 2e4)
+    kept = localisation._keep(centre[:, None], c, K_SIGMA, 0.0, 2e4, h, V)[0][:, 0]
     grid = np.stack(np.meshgrid(*[np.linspace(-1.0, 1.0, 9)] * 3, indexing="ij"), -1).reshape(-1, 3)
-    pruned = np.flatnonzero(_keep_001(centre, h, V, c, K_SIGMA, 0.0, 2e4) & ~kept)
+    pruned = np.flatnonzero(_keep_001(centre[:, None], c, K_SIGMA, 0.0, 2e4, h, V)[0][:, 0] & ~kept)
     pts = (centre[pruned, None, :] + (grid[None] * h[pruned, None, :]) @ np.swapaxes(V[pruned], 1, 2))
-    owner = np.repeat(pruned, grid.shape[0])
-    passing = localisation._keep(pts.reshape(-1, 3), np.zeros((owner.size, 3)), V[owner],
-                                 c.take(owner), K_SIGMA, 0.0, 2e4)
+    passing = localisation._keep(pts, c.take(pruned), K_SIGMA, 0.0, 2e4)[0]
     assert pruned.size > n // 10 and kept.sum() > n // 20  # both cases are exercised
     assert not passing.any()
 
