@@ -143,18 +143,19 @@ def _box(
 
 def _keep(
     pos: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float,
-    h: np.ndarray | None = None, V: np.ndarray | None = None,
+    h: np.ndarray | None = None, V: np.ndarray | None = None, reach: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blocks (centres (M, J, 3): J blocks of each of the M rows of c, half-widths h
     (M, 3) along the axes V (M, 3, 3); none: centre test) that may hold a point within
     k sigma of every valid measurement and inside [z_min, z_max] (M, J), and |r_b
     residual| [36], |azimuth residual| (M, J, K) at the centres. Spread of a block,
-    half-diagonal d: 001's bounds |grad r_b| <= 2 and |grad theta| <= 1 / rho, and with
-    them the tighter Taylor bounds sum_i |g . v_i| h_i + d^2 ||H|| / 2 (g, H: gradient
-    at the centre and bound of the Hessian over the block, ||H|| <= 1 / |x - tx| +
-    1 / |x - rx| for r_b, 1 / rho^2 for theta, distances shrunk by d): a block that
-    fails them holds no point that passes, so the blocks kept at the last level are the
-    same (tests/radar/test_block_pruning.py checks against an exhaustive evaluation)."""
+    half-diagonal d: 001's bounds |grad r_b| <= 2 and |grad theta| <= 1 / rho; and
+    Taylor bounds sum_i |g . v_i| e_i + e^2 ||H|| / 2 over the box of half-widths
+    `reach` (M, 3) <= h that holds the points that matter (e: its half-diagonal; g, H:
+    gradient at the centre and bound of the Hessian over that box, ||H|| <= 1 / |x - tx|
+    + 1 / |x - rx| for r_b, 1 / rho^2 for theta, distances shrunk by e): a block that
+    fails them holds no such point that passes, so the blocks kept at the last level are
+    the same (tests/radar/test_block_pruning.py checks against an exhaustive evaluation)."""
     tx = c.tx if c.tx.ndim == 2 else c.tx[:, None]
     rx = c.rx if c.rx.ndim == 2 else c.rx[:, None]
     srb, saz, valid = c.srb[:, None], c.saz[:, None], c.valid[:, None]
@@ -167,22 +168,23 @@ def _keep(
         ok = np.all(((res_rb <= k * srb) & (res_az <= k * saz)) | ~valid, axis=2)
         return ok & (pos[..., 2] >= z_min) & (pos[..., 2] <= z_max), res_rb, res_az
     rho = np.hypot(d_r[..., 0], d_r[..., 1])
+    reach = h if reach is None else reach
     diag = norm3(h)
-    d = diag[:, None, None]
+    d, e = diag[:, None, None], norm3(reach)[:, None, None]
     with np.errstate(divide="ignore", invalid="ignore"):  # the Taylor bounds
         g_rb = d_t / n_t[..., None] + d_r / n_r[..., None]
         g_az = np.stack([d_r[..., 1], -d_r[..., 0], 0.0 * rho], -1) / rho[..., None] ** 2
-        lin_rb = (np.abs(g_rb @ V[:, None]) @ h[:, None, :, None])[..., 0]
-        lin_az = (np.abs(g_az @ V[:, None]) @ h[:, None, :, None])[..., 0]
-        far_rb = (n_t > d) & (n_r > d)
-        tight_rb = np.where(far_rb, lin_rb + 0.5 * d**2 * (1.0 / (n_t - d) + 1.0 / (n_r - d)),
+        lin_rb = (np.abs(g_rb @ V[:, None]) @ reach[:, None, :, None])[..., 0]
+        lin_az = (np.abs(g_az @ V[:, None]) @ reach[:, None, :, None])[..., 0]
+        far_rb = (n_t > e) & (n_r > e)
+        tight_rb = np.where(far_rb, lin_rb + 0.5 * e**2 * (1.0 / (n_t - e) + 1.0 / (n_r - e)),
                             np.inf)
-        tight_az = np.where(rho > d, lin_az + 0.5 * d**2 / (rho - d) ** 2, np.inf)
+        tight_az = np.where(rho > e, lin_az + 0.5 * e**2 / (rho - e) ** 2, np.inf)
     ok_rb = ((res_rb <= k * srb + 2.0 * d)  # with a margin for the rounding of the bounds
              & (res_rb <= k * srb + tight_rb + 1e-9 * (n_t + n_r)))
     ok_az = ((res_az <= k * saz + d / np.maximum(rho, 1.0))
              & (res_az <= k * saz + tight_az + 1e-12))
-    s_z = np.minimum(diag[:, None], np.abs(V[:, 2, :] * h).sum(axis=1)[:, None]
+    s_z = np.minimum(diag[:, None], np.abs(V[:, 2, :] * reach).sum(axis=1)[:, None]
                      + 1e-9 * np.abs(pos[..., 2]))
     ok_z = (pos[..., 2] >= z_min - s_z) & (pos[..., 2] <= z_max + s_z)
     return np.all((ok_rb & ok_az) | ~valid, axis=2) & ok_z, res_rb, res_az
@@ -212,7 +214,7 @@ def block_localise(
         local = _CHILD[None, :, :] * h[:, None, :]  # (M, 8, 3) in the box axes
         Vo = V[owner]
         pos = pos[:, None, :] + local @ np.swapaxes(Vo, 1, 2)  # the 8 children of each
-        spread = (h, Vo) if level < levels else ()
+        spread = (h, Vo, h - h_end[owner]) if level < levels else ()  # reach: leaf centres
         keep, res_rb, res_az = _keep(pos, c.take(owner), k, z_min, z_max, *spread)
         keep = keep.ravel()
         pos, owner = pos.reshape(-1, 3)[keep], np.repeat(owner, 8)[keep]

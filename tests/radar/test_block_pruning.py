@@ -1,7 +1,8 @@
 """Pruning of module 62's blocks (common.radar.localisation.block_localise): the Taylor
-bounds of `_keep` prune no block that holds a point within k sigma of every measurement
-(exhaustive grid of points in random blocks), and the blocks kept at the last level,
-hence the zones [36]-[41], are those of 001's bounds alone (random geometries)."""
+bounds of `_keep` prune no block whose reach (the box of its leaf centres) holds a point
+within k sigma of every measurement (exhaustive grid of points in random blocks), and
+the blocks kept at the last level, hence the zones [36]-[41], are those of 001's bounds
+alone (random geometries)."""
 
 from __future__ import annotations
 
@@ -42,10 +43,10 @@ def _cov(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def _keep_001(pos: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float,
-              h: np.ndarray | None = None, V: np.ndarray | None = None
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The test of 001's bounds alone (|grad r_b| <= 2, |grad theta| <= 1 / rho), with
-    `_keep`'s signature (blocks (M, J, 3) of the M rows of c)."""
+              h: np.ndarray | None = None, V: np.ndarray | None = None,
+              reach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The test of 001's bounds alone (|grad r_b| <= 2, |grad theta| <= 1 / rho) on the
+    whole block, with `_keep`'s signature (blocks (M, J, 3) of the M rows of c)."""
     M, J, _ = pos.shape
     rows = np.repeat(np.arange(M), J)
     res_rb, res_az, rho = residuals(pos.reshape(-1, 3), c.take(rows))
@@ -62,7 +63,8 @@ def _keep_001(pos: np.ndarray, c: Constraints, k: float, z_min: float, z_max: fl
 @pytest.mark.parametrize("seed", range(4))
 def test_pruned_blocks_hold_no_passing_point(seed: int) -> None:
     """Blocks that 001's bounds keep and `_keep` prunes, against an exhaustive grid of
-    9^3 points in each (corners included): none of the points passes the centre test.
+    9^3 points in the box of each block's reach (corners included): none of the points
+    passes the centre test.
     (001's azimuth bound d / rho, rho at the centre, is itself not a bound near the
     receiver: seed 0 has one such block; it is pruned with or without the Taylor bounds.)"""
     rng = np.random.default_rng(seed)
@@ -70,11 +72,12 @@ def test_pruned_blocks_hold_no_passing_point(seed: int) -> None:
     truth, c = _geometry(rng, n)
     V, _ = np.linalg.qr(rng.standard_normal((n, 3, 3)))
     h = np.exp(rng.uniform(np.log(5.0), np.log(4e3), (n, 3)))
+    reach = h * rng.uniform(0.3, 1.0, (n, 1))
     centre = truth + rng.standard_normal((n, 3)) * 3.0 * h
-    kept = localisation._keep(centre[:, None], c, K_SIGMA, 0.0, 2e4, h, V)[0][:, 0]
+    kept = localisation._keep(centre[:, None], c, K_SIGMA, 0.0, 2e4, h, V, reach)[0][:, 0]
     grid = np.stack(np.meshgrid(*[np.linspace(-1.0, 1.0, 9)] * 3, indexing="ij"), -1).reshape(-1, 3)
     pruned = np.flatnonzero(_keep_001(centre[:, None], c, K_SIGMA, 0.0, 2e4, h, V)[0][:, 0] & ~kept)
-    pts = (centre[pruned, None, :] + (grid[None] * h[pruned, None, :]) @ np.swapaxes(V[pruned], 1, 2))
+    pts = centre[pruned, None, :] + (grid[None] * reach[pruned, None, :]) @ np.swapaxes(V[pruned], 1, 2)
     passing = localisation._keep(pts, c.take(pruned), K_SIGMA, 0.0, 2e4)[0]
     assert pruned.size > n // 10 and kept.sum() > n // 20  # both cases are exercised
     assert not passing.any()
