@@ -112,6 +112,20 @@ def component_gamma(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, y: np.ndarray
     return best
 
 
+def component_gate(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, y: np.ndarray,
+                   R: np.ndarray, tx: np.ndarray, rx: np.ndarray, gamma_max: float
+                   ) -> np.ndarray:
+    """`component_gamma` <= gamma_max (P,) bool, the [48] gate of a membership: the
+    heaviest live components first, the others only for the pairs those fail (the
+    same answer with a fraction of the projections)."""
+    top = (w == w.max(axis=1, keepdims=True)) & (w > 0)
+    ok = component_gamma(np.where(top, w, 0.0), xc, Pc, y, R, tx, rx) <= gamma_max
+    k = np.flatnonzero(~ok)
+    ok[k] = component_gamma(np.where(top[k], 0.0, w[k]), xc[k], Pc[k], y[k], R[k], tx[k],
+                            rx[k]) <= gamma_max
+    return ok
+
+
 def gated_component_pairs(
     w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, tracks: np.ndarray, ets: np.ndarray,
     E: ETrackSet, tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma_max: float,
