@@ -51,8 +51,10 @@ def band_moments(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, A: int
     M = K // A
     w = mu.reshape(N * A, M)
     mass = w.sum(axis=1)
-    x, P = imm.combine(w / np.maximum(mass, 1e-300)[:, None], xm.reshape(N * A, M, 6),
-                       Pm.reshape(N * A, M, 6, 6))
+    x, P = np.zeros((N * A, 6)), np.zeros((N * A, 6, 6))
+    k = np.flatnonzero(mass > 0)
+    x[k], P[k] = imm.combine(w[k] / np.maximum(mass[k], 1e-300)[:, None],
+                             xm.reshape(N * A, M, 6)[k], Pm.reshape(N * A, M, 6, 6)[k])
     return mass.reshape(N, A), x.reshape(N, A, 6), P.reshape(N, A, 6, 6)
 
 
