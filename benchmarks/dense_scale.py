@@ -34,6 +34,25 @@ Measured 2026-11-23 (seed 1, 120 s, 2 shared cores at load 10-27; CPU ms per sca
   fusion 0.97. Failing goals: dense300 switches 1.00 (< 1 asked); dense1000 false
   3.2 %, switches 9 per 100 targets, NEES 7.7 (its false tracks: 80 % hold one target's
   elementary tracks with the altitude 2-3 km off at sigma_z ~ 165 m).
+
+Measured 2026-11-26 (seed 1, 120 s, 2 shared cores at load 1.5-8; CPU ms per scan; two
+interleaved runs each, the faster; every gtracks message of both scenes is identical bit
+for bit before and after, hence the same quality columns):
+
+  scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES
+  before (a5ff39b):
+  dense          120     2.1     3.9   18.3   41.0  0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.07
+  dense300       300     3.0     6.7   44.2   18.5  1.5 (0.5%)   2.1 (0.8%)    1.00   3.00   0.92     3.77
+  after (block pruning by Taylor bounds over the leaf centres, children tested per
+  parent; one call over all bases for the decorrelation, the gate [48] and the v_b
+  rows; the gate by the heaviest component first; norm3; IMM mixing and band moments
+  of live bands only; connected components of the plotter in numpy; gtracks by tolist):
+  dense          120     1.4     3.8   12.3   57.2  0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.07
+  dense300       300     2.4     6.8   27.0   27.6  1.5 (0.5%)   2.1 (0.8%)    1.00   3.00   0.92     3.77
+  This machine runs the chain about 3.2x faster than the one of 2026-11-23 (dense
+  before: 41.0x real here, 12.9x there). End to end 1.40x on dense (fusion -33 %),
+  1.49x on dense300 (fusion -39 %): about 18x real on the 2026-11-23 machine, short of
+  issue 14's 20x there; 57x here.
 """
 
 from __future__ import annotations

@@ -70,8 +70,8 @@ def equivalent(
     R = np.full((n, 3, 3), np.nan)
     if n == 0:
         return Equivalent(z, R, np.zeros(0, dtype=bool))
-    xp = (bistatic_F(dt) @ x0[..., None])[..., 0]  # 001 [19], [25]
     F = bistatic_F(dt)
+    xp = (F @ x0[..., None])[..., 0]  # 001 [19], [25]
     Pp = F @ P0 @ np.swapaxes(F, 1, 2) + bistatic_Q(dt, sigma_gamma, sigma_omega)  # [20], [26]
     d = 1.0 / np.sqrt(np.diagonal(Pp, axis1=1, axis2=2))
     Ii, Ip = _scaled_inv(P, d), _scaled_inv(Pp, d)
@@ -115,24 +115,40 @@ class Decorrelator:
              updated: np.ndarray, ambiguous: np.ndarray) -> Equivalent:
         """The report of base `base` at t: track numbers (E,), states (E, 5), (E, 5, 5),
         flags (E,). Tracks absent from the report are forgotten."""
+        return self.step_bases(t, [base], np.full(ids.size, base), ids, x, P, updated, ambiguous)
+
+    def step_bases(self, t: float, reported: list[int], base: np.ndarray, ids: np.ndarray,
+                   x: np.ndarray, P: np.ndarray, updated: np.ndarray, ambiguous: np.ndarray
+                   ) -> Equivalent:
+        """`step` for the reports at t of the bases `reported`, row k of base base[k]
+        (E,): one `equivalent` over all of them (per-row arithmetic: the same values)."""
         n = ids.size
         z = np.full((n, 3), np.nan)
         R = np.full((n, 3, 3), np.nan)
         ok = np.zeros(n, dtype=bool)
-        prev = self.last.get(base)
         seen = np.zeros(n, dtype=bool)
-        if prev is not None and prev[1].size:
-            t0, ids0, x0, P0 = prev
-            order = np.argsort(ids0)
-            j = order[np.clip(np.searchsorted(ids0[order], ids), 0, ids0.size - 1)]
-            seen = (ids0[j] == ids) & (t > t0)
-            use = np.flatnonzero(seen & updated & ~ambiguous)
-            eq = equivalent(x0[j[use]], P0[j[use]], np.full(use.size, t - t0), x[use], P[use],
-                            self.sigma_gamma, self.sigma_omega, self.gate)
+        rows, x0, P0, dt = [], [], [], []
+        for b in reported:
+            k = np.flatnonzero(base == b)
+            prev = self.last.get(b)
+            if prev is not None and prev[1].size:
+                t_b, ids0, x_b, P_b = prev
+                order = np.argsort(ids0)
+                j = order[np.clip(np.searchsorted(ids0[order], ids[k]), 0, ids0.size - 1)]
+                seen[k] = (ids0[j] == ids[k]) & (t > t_b)
+                use = np.flatnonzero(seen[k] & updated[k] & ~ambiguous[k])
+                rows.append(k[use])
+                x0.append(x_b[j[use]])
+                P0.append(P_b[j[use]])
+                dt.append(np.full(use.size, t - t_b))
+            self.last[b] = (t, ids[k].copy(), x[k].copy(), P[k].copy())
+        if rows:
+            use = np.concatenate(rows)
+            eq = equivalent(np.concatenate(x0), np.concatenate(P0), np.concatenate(dt), x[use],
+                            P[use], self.sigma_gamma, self.sigma_omega, self.gate)
             z[use], R[use], ok[use] = eq.z, eq.R, eq.ok
         first = ~seen & updated & ~ambiguous
         z[first] = x[first][:, IDX]
         R[first] = P[first][:, IDX][:, :, IDX]
         ok[first] = True
-        self.last[base] = (t, ids.copy(), x.copy(), P.copy())
         return Equivalent(z, R, ok)

@@ -102,14 +102,28 @@ def gated_pairs(
 def component_gamma(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, y: np.ndarray,
                     R: np.ndarray, tx: np.ndarray, rx: np.ndarray) -> np.ndarray:
     """[48] for aligned pairs of a track's mixture (w (P, K), xc (P, K, 6), Pc
-    (P, K, 6, 6)) and an elementary estimate (y (P, 3), R (P, 3, 3)) of one base: the
-    smallest gamma over the live components (inf if none is live); see
-    `gated_component_pairs` for why per component."""
+    (P, K, 6, 6)) and an elementary estimate (y (P, 3), R (P, 3, 3)) of the base with
+    geometry tx, rx (P, 3) each: the smallest gamma over the live components (inf if
+    none is live); see `gated_component_pairs` for why per component."""
     p, k = np.nonzero(w > 0)
-    y_pred, GPG = projections(xc[p, k], Pc[p, k], tx, rx)
+    y_pred, GPG = projections(xc[p, k], Pc[p, k], tx[p], rx[p])
     best = np.full(w.shape[0], np.inf)
     np.minimum.at(best, p, distance(y_pred, GPG, y[p], R[p]))  # [48]
     return best
+
+
+def component_gate(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, y: np.ndarray,
+                   R: np.ndarray, tx: np.ndarray, rx: np.ndarray, gamma_max: float
+                   ) -> np.ndarray:
+    """`component_gamma` <= gamma_max (P,) bool, the [48] gate of a membership: the
+    heaviest live components first, the others only for the pairs those fail (the
+    same answer with a fraction of the projections)."""
+    top = (w == w.max(axis=1, keepdims=True)) & (w > 0)
+    ok = component_gamma(np.where(top, w, 0.0), xc, Pc, y, R, tx, rx) <= gamma_max
+    k = np.flatnonzero(~ok)
+    ok[k] = component_gamma(np.where(top[k], 0.0, w[k]), xc[k], Pc[k], y[k], R[k], tx[k],
+                            rx[k]) <= gamma_max
+    return ok
 
 
 def gated_component_pairs(

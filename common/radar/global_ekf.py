@@ -42,9 +42,9 @@ def observation(x: np.ndarray, tx: np.ndarray, rx: np.ndarray) -> tuple[np.ndarr
     H = np.zeros((n, 3 + B, 6))
     h[:, :3] = x[:, POS]  # 001 [54], position rows
     H[:, [0, 1, 2], POS] = 1.0
-    for b in range(B):
-        h[:, 3 + b] = project(x, tx[b], rx[b])[:, 1]  # 001 [54]
-        H[:, 3 + b] = project_jacobian(x, tx[b], rx[b])[:, 1]  # 001 [57]
+    xs, txs, rxs = np.repeat(x, B, axis=0), np.tile(tx, (n, 1)), np.tile(rx, (n, 1))
+    h[:, 3:] = project(xs, txs, rxs)[:, 1].reshape(n, B)  # 001 [54], all bases at once
+    H[:, 3:] = project_jacobian(xs, txs, rxs)[:, 1].reshape(n, B, 6)  # 001 [57]
     return h, H
 
 

@@ -86,7 +86,7 @@ from common.core.crossing import CrossingManager, CrossingParams
 from common.radar.decorrelation import Decorrelator
 from common.radar.elementary import ElementaryParams, ElementaryTracks
 from common.core.gating import chi2_gate
-from common.radar.global_assoc import (ETrackSet, component_gamma, gated_component_pairs,
+from common.radar.global_assoc import (ETrackSet, component_gate, gated_component_pairs,
                                        gated_pairs, resolve)
 from common.radar.global_filter import MixtureFilter
 from common.radar.global_merge import duplicate_pairs
@@ -255,11 +255,9 @@ class GlobalFusion:
         k = b * (1 << 40) + tab.member[s, b]
         r = order[np.clip(np.searchsorted(keys[order], k), 0, len(E) - 1)] if len(E) else k * 0
         ok = (keys[r] == k) if len(E) else np.zeros(k.size, dtype=bool)
-        for bb in np.unique(b[ok]):
-            sel = np.flatnonzero(ok & (b == bb))
-            gam = component_gamma(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
-                                  self.tx[bb], self.rx[bb])  # [48]
-            ok[sel] = gam <= self.gamma_max
+        sel = np.flatnonzero(ok)  # all bases at once
+        ok[sel] = component_gate(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
+                                 self.tx[b[sel]], self.rx[b[sel]], self.gamma_max)  # [48]
         tab.has[s[~ok], b[~ok]] = False  # dissociation
         row[s[ok], b[ok]] = r[ok]
         return row

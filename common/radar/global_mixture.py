@@ -32,8 +32,11 @@ def predict(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, dt: np.ndarray, A: i
     N, K = mu.shape
     M = K // A
     p = np.repeat(imm.transition(dt, sojourn), A, axis=0)  # (N * A, M, M)
-    c, x0, P0 = imm.mix(mu.reshape(N * A, M), xm.reshape(N * A, M, 6),
-                        Pm.reshape(N * A, M, 6, 6), p)
+    w = mu.reshape(N * A, M)
+    c, x0, P0 = np.zeros((N * A, M)), np.zeros((N * A, M, 6)), np.zeros((N * A, M, 6, 6))
+    band = np.flatnonzero(w.sum(axis=1) > 0)  # a dead band mixes to zeros: left out
+    c[band], x0[band], P0[band] = imm.mix(w[band], xm.reshape(N * A, M, 6)[band],
+                                          Pm.reshape(N * A, M, 6, 6)[band], p[band])
     c, x0, P0 = c.reshape(N, K), x0.reshape(N, K, 6), P0.reshape(N, K, 6, 6)
     ti, ki = np.nonzero(c > 0)
     x0[ti, ki], P0[ti, ki] = global_ekf.predict(x0[ti, ki], P0[ti, ki], dt[ti], q[ki % M], q_z)
@@ -48,8 +51,10 @@ def band_moments(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, A: int
     M = K // A
     w = mu.reshape(N * A, M)
     mass = w.sum(axis=1)
-    x, P = imm.combine(w / np.maximum(mass, 1e-300)[:, None], xm.reshape(N * A, M, 6),
-                       Pm.reshape(N * A, M, 6, 6))
+    x, P = np.zeros((N * A, 6)), np.zeros((N * A, 6, 6))
+    k = np.flatnonzero(mass > 0)
+    x[k], P[k] = imm.combine(w[k] / np.maximum(mass[k], 1e-300)[:, None],
+                             xm.reshape(N * A, M, 6)[k], Pm.reshape(N * A, M, 6, 6)[k])
     return mass.reshape(N, A), x.reshape(N, A, 6), P.reshape(N, A, 6, 6)
 
 
@@ -86,15 +91,15 @@ def prune_merge(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, A: int, prune: f
     xb, Pb = bands(xm, A), bands(Pm, A)
     rows = np.flatnonzero((mu.sum(axis=2) > 0).sum(axis=1) >= 2)
     prev = np.full(rows.size, -1)
+    _, zm, Pz = band_moments(mu[rows].reshape(rows.size, K), xm[rows], Pm[rows], A)
+    zm, vz = zm[..., 4], Pz[..., 4, 4]  # altitude moments of the bands of `rows`, (n, A)
     for b in range(A):
         live = mu[rows, b].sum(axis=1) > 0
         k = np.flatnonzero(live & (prev >= 0))
         if k.size:
             r, a = rows[k], prev[k]
-            ma, xa, Pa = band_moments(mu[r, a], xb[r, a], Pb[r, a], 1)
-            mb, xz, Pz = band_moments(mu[r, b], xb[r, b], Pb[r, b], 1)
-            z = np.stack([xa[:, 0, 4], xz[:, 0, 4]], axis=1)
-            sz = np.sqrt(np.stack([Pa[:, 0, 4, 4], Pz[:, 0, 4, 4]], axis=1))
+            z = np.stack([zm[k, a], zm[k, b]], axis=1)
+            sz = np.sqrt(np.stack([vz[k, a], vz[k, b]], axis=1))
             ok = (np.all(sz < linear * (z - z_ref), axis=1)
                   & (np.abs(z[:, 0] - z[:, 1]) < merge_sigma * np.sqrt((sz**2).sum(axis=1))))
             r, a = r[ok], a[ok]
@@ -105,6 +110,9 @@ def prune_merge(mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, A: int, prune: f
                                np.stack([Pb[r, a], Pb[r, b]], axis=2).reshape(-1, 2, 6, 6))
             xb[r, a], Pb[r, a] = x.reshape(-1, M, 6), P.reshape(-1, M, 6, 6)
             mu[r, a], mu[r, b] = tot, 0.0
+            if r.size:
+                _, xa, Pa = band_moments(mu[r, a], xb[r, a], Pb[r, a], 1)
+                zm[k[ok], a], vz[k[ok], a] = xa[:, 0, 4], Pa[:, 0, 4, 4]
             live[k[ok]] = False  # merged: the band below stays the reference
         prev = np.where(live, b, prev)
     mu = mu.reshape(N, K)

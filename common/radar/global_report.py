@@ -56,11 +56,8 @@ def etrack_set(reports: dict[int, ElementaryTracks], decorrelator: Decorrelator,
 
     base = np.repeat(np.array(list(reports), dtype=np.intp), [len(r) for r in rs])
     ids, updated, ambiguous = col("id", np.int64), col("updated", bool), col("ambiguous", bool)
-    z, Rz, meas = np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros(n, dtype=bool)
-    for b in reports:
-        k = np.flatnonzero(base == b)
-        eq = decorrelator.step(b, t, ids[k], x[k], P[k], updated[k], ambiguous[k])
-        z[k], Rz[k], meas[k] = eq.z, eq.R, eq.ok
+    eq = decorrelator.step_bases(t, list(reports), base, ids, x, P, updated, ambiguous)
+    z, Rz, meas = eq.z, eq.R, eq.ok
     y, R = x[:, YR], P[:, YR][:, :, YR]
     z[~meas], Rz[~meas] = y[~meas], R[~meas]  # finite placeholders, masked by meas
     return ETrackSet(

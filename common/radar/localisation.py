@@ -50,6 +50,7 @@ from scipy.special import erf
 
 from common.core.angles import wrap_pi
 from common.core.imm import gaussian_loglik
+from common.radar.bistatic import norm3
 
 STEP_TOL = 1e-6  # squared step (in posterior sigmas) below which a row stops iterating
 COV_CORRECTION = 1.5  # inverse of the 2/3 variance ratio of the erf weight [37]
@@ -84,7 +85,7 @@ def residuals(pos: np.ndarray, c: Constraints) -> tuple[np.ndarray, np.ndarray, 
     horizontal receiver distance, each (N, K) for positions (N, 3)."""
     d_t = pos[:, None, :] - c.tx
     d_r = pos[:, None, :] - c.rx
-    rb = np.linalg.norm(d_t, axis=-1) + np.linalg.norm(d_r, axis=-1)  # 001 [36]
+    rb = norm3(d_t) + norm3(d_r)  # 001 [36]
     az = np.arctan2(d_r[..., 0], d_r[..., 1])
     return c.rb - rb, wrap_pi(c.az - az), np.hypot(d_r[..., 0], d_r[..., 1])
 
@@ -108,8 +109,8 @@ def gauss_newton(
     for it in range(iterations + 1):
         d_t = x[:, None, :] - c.tx
         d_r = x[:, None, :] - c.rx
-        n_t = np.linalg.norm(d_t, axis=-1, keepdims=True)
-        n_r = np.linalg.norm(d_r, axis=-1, keepdims=True)
+        n_t = norm3(d_t)[..., None]
+        n_r = norm3(d_r)[..., None]
         rho2 = d_r[..., 0] ** 2 + d_r[..., 1] ** 2
         j_rb = (d_t / n_t + d_r / n_r) * (w / c.srb)[..., None]
         j_az = np.zeros_like(j_rb)
@@ -141,30 +142,58 @@ def _box(
 
 
 def _keep(
-    pos: np.ndarray, diag: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float
-) -> np.ndarray:
-    """Blocks (centres (M, 3), half-diagonals (M,)) that may hold a point within k sigma
-    of every valid measurement and inside [z_min, z_max]; |grad r_b| <= 2 and
-    |grad theta| <= 1 / rho bound the spread of a block (diag = 0: centre test)."""
-    res_rb, res_az, rho = residuals(pos, c)
-    d = diag[:, None]
-    ok_rb = np.abs(res_rb) <= k * c.srb + 2.0 * d
-    ok_az = np.abs(res_az) <= k * c.saz + d / np.maximum(rho, 1.0)
-    ok_z = (pos[:, 2] >= z_min - diag) & (pos[:, 2] <= z_max + diag)
-    return np.all((ok_rb & ok_az) | ~c.valid, axis=1) & ok_z
+    pos: np.ndarray, c: Constraints, k: float, z_min: float, z_max: float,
+    h: np.ndarray | None = None, V: np.ndarray | None = None, reach: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Blocks (centres (M, J, 3): J blocks of each of the M rows of c, half-widths h
+    (M, 3) along the axes V (M, 3, 3); none: centre test) that may hold a point within
+    k sigma of every valid measurement and inside [z_min, z_max] (M, J), and |r_b
+    residual| [36], |azimuth residual| (M, J, K) at the centres. Spread of a block,
+    half-diagonal d: 001's bounds |grad r_b| <= 2 and |grad theta| <= 1 / rho; and
+    Taylor bounds sum_i |g . v_i| e_i + e^2 ||H|| / 2 over the box of half-widths
+    `reach` (M, 3) <= h that holds the points that matter (e: its half-diagonal; g, H:
+    gradient at the centre and bound of the Hessian over that box, ||H|| <= 1 / |x - tx|
+    + 1 / |x - rx| for r_b, 1 / rho^2 for theta, distances shrunk by e): a block that
+    fails them holds no such point that passes, so the blocks kept at the last level are
+    the same (tests/radar/test_block_pruning.py checks against an exhaustive evaluation)."""
+    tx = c.tx if c.tx.ndim == 2 else c.tx[:, None]
+    rx = c.rx if c.rx.ndim == 2 else c.rx[:, None]
+    srb, saz, valid = c.srb[:, None], c.saz[:, None], c.valid[:, None]
+    d_t = pos[:, :, None, :] - tx
+    d_r = pos[:, :, None, :] - rx
+    n_t, n_r = norm3(d_t), norm3(d_r)
+    res_rb = np.abs(c.rb[:, None] - (n_t + n_r))  # 001 [36], as `residuals`
+    res_az = np.abs(wrap_pi(c.az[:, None] - np.arctan2(d_r[..., 0], d_r[..., 1])))
+    if h is None or V is None:
+        ok = np.all(((res_rb <= k * srb) & (res_az <= k * saz)) | ~valid, axis=2)
+        return ok & (pos[..., 2] >= z_min) & (pos[..., 2] <= z_max), res_rb, res_az
+    rho = np.hypot(d_r[..., 0], d_r[..., 1])
+    reach = h if reach is None else reach
+    diag = norm3(h)
+    d, e = diag[:, None, None], norm3(reach)[:, None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):  # the Taylor bounds
+        g_rb = d_t / n_t[..., None] + d_r / n_r[..., None]
+        g_az = np.stack([d_r[..., 1], -d_r[..., 0], 0.0 * rho], -1) / rho[..., None] ** 2
+        lin_rb = (np.abs(g_rb @ V[:, None]) @ reach[:, None, :, None])[..., 0]
+        lin_az = (np.abs(g_az @ V[:, None]) @ reach[:, None, :, None])[..., 0]
+        far_rb = (n_t > e) & (n_r > e)
+        tight_rb = np.where(far_rb, lin_rb + 0.5 * e**2 * (1.0 / (n_t - e) + 1.0 / (n_r - e)),
+                            np.inf)
+        tight_az = np.where(rho > e, lin_az + 0.5 * e**2 / (rho - e) ** 2, np.inf)
+    ok_rb = ((res_rb <= k * srb + 2.0 * d)  # with a margin for the rounding of the bounds
+             & (res_rb <= k * srb + tight_rb + 1e-9 * (n_t + n_r)))
+    ok_az = ((res_az <= k * saz + d / np.maximum(rho, 1.0))
+             & (res_az <= k * saz + tight_az + 1e-12))
+    s_z = np.minimum(diag[:, None], np.abs(V[:, 2, :] * reach).sum(axis=1)[:, None]
+                     + 1e-9 * np.abs(pos[..., 2]))
+    ok_z = (pos[..., 2] >= z_min - s_z) & (pos[..., 2] <= z_max + s_z)
+    return np.all((ok_rb & ok_az) | ~valid, axis=2) & ok_z, res_rb, res_az
 
 
 def block_localise(
-    x0: np.ndarray,
-    C0: np.ndarray,
-    c: Constraints,
-    k: float = 3.0,
-    levels: int = 3,
-    z_min: float = 0.0,
-    z_max: float = 20000.0,
-    box_sigma: float = 4.0,
-    min_half: float = 25.0,
-    max_half: float = 30000.0,
+    x0: np.ndarray, C0: np.ndarray, c: Constraints, k: float = 3.0, levels: int = 3,
+    z_min: float = 0.0, z_max: float = 20000.0, box_sigma: float = 4.0,
+    min_half: float = 25.0, max_half: float = 30000.0,
     z_prior: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blocks around x0 (N, 3) sized by C0 (N, 3, 3) -> (mean (N, 3), cov (N, 3, 3),
@@ -176,20 +205,23 @@ def block_localise(
         return np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0, dtype=np.intp)
     V, half0 = _box(C0, box_sigma, min_half, max_half)
     pos, owner = np.array(x0, dtype=float), np.arange(n)
+    res_rb, res_az = (np.abs(r) for r in residuals(pos, c)[:2])  # levels = 0: at x0
     h_end = half0 / 2.0**levels
     within = (V * (h_end**2 / 3.0)[:, None, :]) @ np.swapaxes(V, 1, 2)
+    K = c.rb.shape[1]
     for level in range(1, levels + 1):
         h = half0[owner] / 2.0**level
         local = _CHILD[None, :, :] * h[:, None, :]  # (M, 8, 3) in the box axes
-        pos = (pos[:, None, :] + local @ np.swapaxes(V[owner], 1, 2)).reshape(-1, 3)
-        owner = np.repeat(owner, 8)
-        diag = np.repeat(np.linalg.norm(h, axis=1), 8) if level < levels else np.zeros(pos.shape[0])
-        keep = _keep(pos, diag, c.take(owner), k, z_min, z_max)
-        pos, owner = pos[keep], owner[keep]
+        Vo = V[owner]
+        pos = pos[:, None, :] + local @ np.swapaxes(Vo, 1, 2)  # the 8 children of each
+        spread = (h, Vo, h - h_end[owner]) if level < levels else ()  # reach: leaf centres
+        keep, res_rb, res_az = _keep(pos, c.take(owner), k, z_min, z_max, *spread)
+        keep = keep.ravel()
+        pos, owner = pos.reshape(-1, 3)[keep], np.repeat(owner, 8)[keep]
+        res_rb, res_az = res_rb.reshape(-1, K)[keep], res_az.reshape(-1, K)[keep]
     cm = c.take(owner)
-    res_rb, res_az, _ = residuals(pos, cm)
-    p_rb = 1.0 - erf(np.abs(res_rb) / (cm.srb * np.sqrt(2.0)))  # 001 [37]
-    p_az = 1.0 - erf(np.abs(res_az) / (cm.saz * np.sqrt(2.0)))  # [37] for the azimuth
+    p_rb = 1.0 - erf(res_rb / (cm.srb * np.sqrt(2.0)))  # 001 [37]
+    p_az = 1.0 - erf(res_az / (cm.saz * np.sqrt(2.0)))  # [37] for the azimuth
     p = np.prod(np.where(cm.valid, p_rb * p_az, 1.0), axis=1)
     if z_prior is not None:
         p = p * (1.0 - erf(np.abs(pos[:, 2] - z_prior[0]) / (z_prior[1] * np.sqrt(2.0))))
@@ -214,7 +246,7 @@ def _predict_meas(pts: np.ndarray, c: Constraints, ref_az: np.ndarray) -> np.nda
     rx = c.rx[None, None] if c.rx.ndim == 2 else c.rx[:, None]
     d_t = pts[:, :, None, :] - tx
     d_r = pts[:, :, None, :] - rx
-    rb = np.linalg.norm(d_t, axis=-1) + np.linalg.norm(d_r, axis=-1)  # 001 [36]
+    rb = norm3(d_t) + norm3(d_r)  # 001 [36]
     az = ref_az[:, None, :] + wrap_pi(np.arctan2(d_r[..., 0], d_r[..., 1]) - ref_az[:, None, :])
     return np.concatenate([rb, az], axis=-1)
 

@@ -119,10 +119,15 @@ def etracks_of(payload: bytes) -> tuple[str, ElementaryTracks]:
 
 
 def gtracks_message(g: GlobalTracks) -> dict[str, Any]:
-    """The `radar/gtracks` message of one fusion cycle (every live global track)."""
+    """The `radar/gtracks` message of one fusion cycle (every live global track); the
+    columns go to Python lists in one `tolist` each (per-track conversion cost 1.6 ms a
+    dense.toml cycle)."""
+    n = len(g)
+    bases = list(g.bases)
+    member, has = g.member.tolist(), g.has.tolist()
     return {"v": protocol.VERSION, "t": g.t, "tracks": [
-        {"id": int(g.id[k]), "status": STATUS_NAME[Status(int(g.status[k]))],
-         "x": g.x[k].tolist(), "P": g.P[k].ravel().tolist(), "score": float(g.score[k]),
-         "etracks": [[g.bases[b], int(g.member[k, b])] for b in np.flatnonzero(g.has[k])],
-         "ambiguous": bool(g.ambiguous[k])}
-        for k in range(len(g))]}
+        {"id": i, "status": STATUS_NAME[s], "x": x, "P": p, "score": sc,
+         "etracks": [[bases[b], m[b]] for b, on in enumerate(h) if on], "ambiguous": a}
+        for i, s, x, p, sc, m, h, a in zip(g.id.tolist(), g.status.tolist(), g.x.tolist(),
+                                            g.P.reshape(n, 36).tolist(), g.score.tolist(),
+                                            member, has, g.ambiguous.tolist())]}

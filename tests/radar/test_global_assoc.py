@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from common.radar.bistatic import project, project_jacobian
-from common.radar.global_assoc import (ETrackSet, distance, gated_component_pairs, gated_pairs,
-                                 projections, resolve)
+from common.radar.global_assoc import (ETrackSet, component_gamma, component_gate, distance,
+                                       gated_component_pairs, gated_pairs, projections, resolve)
 
 TX = np.array([-35000.0, 20000.0, 300.0])
 RX = np.array([0.0, 0.0, 30.0])
@@ -135,3 +135,28 @@ def test_resolution_loop_vectorised_equals_sequential() -> None:
         ti, mi = resolve(i, m, g)
         assert dict(zip(ti.tolist(), mi.tolist())) == _sequential(i, m, g)
         assert len(set(mi.tolist())) == mi.size  # one global track per elementary track
+
+
+def test_component_gate_is_smallest_component_gamma_gated() -> None:
+    """component_gate (heaviest components first) answers exactly component_gamma <=
+    gamma_max on random mixtures around random targets, near and far from the gate,
+    with ties of weights and dead components, per-pair geometry."""
+    rng = np.random.default_rng(7)
+    n, K = 4000, 6
+    tx = rng.uniform(-4e4, 4e4, (n, 3)) * [1, 1, 0]
+    rx = np.zeros((n, 3))
+    truth = np.concatenate([rng.uniform(-6e4, 6e4, (n, 1)), rng.normal(0, 200, (n, 1)),
+                            rng.uniform(-6e4, 6e4, (n, 1)), rng.normal(0, 200, (n, 1)),
+                            rng.uniform(300, 1e4, (n, 1)), np.zeros((n, 1))], axis=1)
+    xc = truth[:, None, :] + rng.normal(0, 1, (n, K, 6)) * [800, 40, 800, 40, 2000, 5]
+    Pc = np.tile(np.diag([300.0, 20.0, 300.0, 20.0, 1000.0, 3.0]) ** 2, (n, K, 1, 1))
+    w = rng.choice([0.0, 0.1, 0.25, 0.5], (n, K))
+    w[:, 0] += 1e-3 * (rng.random(n) < 0.5)
+    w[rng.random(n) < 0.02] = 0.0  # no live component: gamma inf
+    R = np.tile(np.diag([100.0, 5.0, 0.01]) ** 2, (n, 1, 1))
+    y = project(truth, tx, rx) + rng.normal(0, 1, (n, 3)) * [100.0, 5.0, 0.01]
+    gam = component_gamma(w, xc, Pc, y, R, tx, rx)
+    gamma_max = float(np.median(gam[np.isfinite(gam)]))
+    ok = component_gate(w, xc, Pc, y, R, tx, rx, gamma_max)
+    assert 0.2 < ok.mean() < 0.8 and np.isinf(gam).any()
+    np.testing.assert_array_equal(ok, gam <= gamma_max)

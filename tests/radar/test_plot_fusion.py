@@ -8,7 +8,7 @@ import pytest
 
 from common.core.rejection import Rejected
 from common.radar.plot_fusion import (
-    PlotFusion, Plots, accept, aggregate, fuse, fuse_scan,
+    PlotFusion, Plots, accept, aggregate, components, fuse, fuse_scan,
 )
 
 
@@ -137,3 +137,19 @@ def test_scan_completed_by_a_time_already_seen_elsewhere() -> None:
     # b reports 3 after a reported 5: scan 3 can never be completed by a, emit now
     out = core.push("b", 3.0, one)
     assert [t for t, _ in out] == [3.0] and out[0][1].n_ch.tolist() == [1]
+
+
+def test_components_as_scipy() -> None:
+    """plot_fusion.components labels every node as scipy's connected_components does
+    (numbering by smallest node), on random graphs with loops and repeated edges."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(2)
+    for _ in range(500):
+        n = int(rng.integers(1, 60))
+        e = int(rng.integers(0, 2 * n))
+        a, b = rng.integers(0, n, e), rng.integers(0, n, e)
+        _, ref = connected_components(coo_matrix((np.ones(e), (a, b)), shape=(n, n)),
+                                      directed=False)
+        np.testing.assert_array_equal(components(n, a, b), ref)
