@@ -36,6 +36,13 @@ tracks 0.06 s after its plots (kept up), end to end p50 / p99 77 / 960 ms (plott
 tracker 12 / 26, fusion 46 / 904 ms; the p99 again the cycles that initialise a run's
 tracks), fusion handling p50 / p99 1.3 / 85 ms.
 
+2026-11-26 (session 9, after the fusion speed-ups of benchmarks/dense_scale.py; 30 s at
+each rate, load average 5-7 from other work; this machine ran the in-process chain ~3x
+faster than the one above): 20x: 600 scans, kept up (last gtracks 0.03 s after its
+plots), 0 lost, 0 missed, 0 rejected, end to end p50 / p99 33 / 335 ms; 30x: 960 scans,
+kept up, 0 lost, 130 / 542 ms; 40x: 1200 scans, 0 lost, the last scan 2.3 s after its
+plots (end to end p50 2.8 s: the ceiling is between 30x and 40x).
+
 Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N]
 """
 
