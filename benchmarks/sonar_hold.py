@@ -2,7 +2,7 @@
 bearing RMSE of the bearing tracker on scenes it was not tuned on, 20 seeds each, in one
 process (simulator -> common.sonar.bearing_tracker, the code the service runs).
 
-Run: .venv/bin/python benchmarks/sonar_hold.py [--runs 20] [--case NAME ...]
+Run: .venv/bin/python benchmarks/sonar_hold.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
 
 Scenes (scenarios/, written before the tracker changes they measure; the tracker runs
 with the defaults of docs/configuration.md, crossing management with them except
@@ -11,7 +11,16 @@ max_duration = 600 s, the same on every scene, set after the first measurement):
                      pair, a North crossing, 240 cycles of 5 s;
   sonar_hold_cpa     a 15 kn contact passing 1 km from the own ship (up to 35 deg/min),
                      2 deg sigma, 3 false detections, 300 cycles of 2 s;
-  sonar_hold_cross_eq / _uneq   equal / unequal speed crossings, 3 false detections.
+  sonar_hold_cross_eq / _uneq   equal / unequal speed crossings, 3 false detections;
+  sonar_hold_cross_turn   an equal-speed crossing while the own ship turns 90 deg, 3 false
+                     detections (written 2026-11-26 before the changes it measures);
+  sonar_hold_cross_slow   a slow unequal-speed crossing, 1.25 deg/min relative rate, 3
+                     false detections (written 2026-11-26 before the changes it measures).
+
+Modes: gnn, the single-hypothesis tracker with seed 004 crossing management
+(common.sonar.bearing_tracker); mht, the multiple-hypothesis mode (common.sonar.mht) with
+[sonar.tracker.mht] and rho_F = the scene's false detections per rad and per 10 dB (as
+benchmarks/mht.py).
 
 Scoring per cycle: each truth takes the nearest confirmed track within 5 sigma of
 bearing (sigma = the array's sigma0); a confirmed track that is never such a nearest
@@ -30,6 +39,7 @@ scene; breaks 0 in >= 95 % of runs; swaps 0 in every run.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tomllib
 from dataclasses import dataclass, replace
@@ -45,8 +55,11 @@ from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
 from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
 from common.sonar.bearing_tracker import BearingTracker, TrackerParams  # noqa: E402
+from common.sonar.mht import MhtParams, MhtTracker  # noqa: E402
 
-CASES = ("sonar_hold5", "sonar_hold_cpa", "sonar_hold_cross_eq", "sonar_hold_cross_uneq")
+CASES = ("sonar_hold5", "sonar_hold_cpa", "sonar_hold_cross_eq", "sonar_hold_cross_uneq",
+         "sonar_hold_cross_turn", "sonar_hold_cross_slow")
+MODES = ("gnn", "mht")
 GATE, RESOLVED = 5.0, 6.0  # sigma0 units
 
 
@@ -118,15 +131,22 @@ class Scorer:
         return self.s
 
 
-def run_once(path: Path, seed: int) -> RunScore:
-    """Run the scene of one deployment/scenario file with one seed and score it."""
+def run_once(path: Path, seed: int, mode: str = "gnn") -> RunScore:
+    """Run the scene of one deployment/scenario file with one seed through one mode
+    ("gnn" or "mht") and score it."""
     cfg = load(path)
     arr = cfg.arrays[0]
-    scn = load_scenario(tomllib.loads(path.read_text()))
+    doc = tomllib.loads(path.read_text())
+    scn = load_scenario(doc)
     params = section(cfg, "sonar.tracker", TrackerParams)
-    crossing = section(cfg, "sonar.crossing", CrossingParams)
-    trk = BearingTracker(replace(params, mode="broadband") if params.mode == "auto" else params,
-                         arr.kind, arr.sigma0, crossing)
+    params = replace(params, mode="broadband") if params.mode == "auto" else params
+    trk: BearingTracker | MhtTracker
+    if mode == "mht":
+        rho_f = doc["sim"]["sonar"]["clutter"] / (2.0 * math.pi * 10.0)
+        trk = MhtTracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
+                         arr.kind, arr.sigma0)
+    else:
+        trk = BearingTracker(params, arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     sc = Scorer(arr.sigma0)
     for _, msgs in run_scenario(scn, [], cfg.arrays, seed):
         truth = next(m for k, m in msgs if k == "sim/truth/sonar")
@@ -142,19 +162,21 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=20)
     ap.add_argument("--case", nargs="*", default=list(CASES))
+    ap.add_argument("--mode", nargs="*", default=list(MODES), choices=MODES)
     a = ap.parse_args(argv)
     ok = True
-    print(f"{'scene':<24}{'runs':>5}{'false/100cyc':>13}{'break runs':>11}{'breaks':>7}"
+    print(f"{'scene':<24}{'mode':>5}{'runs':>5}{'false/100cyc':>13}{'break runs':>11}{'breaks':>7}"
           f"{'swap runs':>10}{'swaps':>6}{'RMSE deg':>9}")
-    for case in a.case:
-        scores = [run_once(REPO / "scenarios" / f"{case}.toml", seed) for seed in range(1, a.runs + 1)]
+    for case, mode in [(c, m) for c in a.case for m in a.mode]:
+        scores = [run_once(REPO / "scenarios" / f"{case}.toml", seed, mode) for seed in range(1, a.runs + 1)]
         cycles = sum(r.cycles for r in scores)
         false_rate = 100.0 * sum(r.false_tracks for r in scores) / cycles
         break_runs = sum(r.breaks > 0 for r in scores)
         swap_runs = sum(r.swaps > 0 for r in scores)
         rmse = np.degrees(np.sqrt(sum(r.sq_err for r in scores) / max(1, sum(r.n_err for r in scores))))
-        print(f"{case:<24}{len(scores):>5}{false_rate:>13.2f}{break_runs:>11}"
-              f"{sum(r.breaks for r in scores):>7}{swap_runs:>10}{sum(r.swaps for r in scores):>6}{rmse:>9.2f}")
+        print(f"{case:<24}{mode:>5}{len(scores):>5}{false_rate:>13.2f}{break_runs:>11}"
+              f"{sum(r.breaks for r in scores):>7}{swap_runs:>10}{sum(r.swaps for r in scores):>6}{rmse:>9.2f}",
+              flush=True)
         ok &= false_rate < 1.0 and break_runs <= 0.05 * len(scores) and swap_runs == 0
     print("goals met" if ok else "GOAL FAILED: false < 1/100 cycles, breaks 0 in 95 % of runs, swaps 0")
     return 0 if ok else 1
