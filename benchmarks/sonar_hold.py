@@ -49,6 +49,9 @@ models per hypothesis, the quiet one only in a resolution conflict (common.sonar
   sonar_hold_cross_turn  mht           0.03  0 (0)  11 (21)  0.87          0.03  0 (0)  0 (0)  0.42
   sonar_hold_cross_slow  gnn           0.04  0 (0)   1 (1)   0.74          0.04  0 (0)  0 (0)  0.53
   sonar_hold_cross_slow  mht           0.02  0 (0)   7 (14)  0.85          0.02  0 (0)  0 (0)  0.39
+With 40 seeds (--runs 40), swap runs GNN before -> after: cross_eq 2 -> 1, cross_uneq 0 -> 0,
+cross_turn 2 -> 1, cross_slow 3 -> 1 (break runs 0/1/1/0 -> 0/0/1/0); MHT after: 0 swaps on all
+six scenes, break runs hold5 3, cpa 1, cross_uneq 1, cross_turn 1.
 Open: the GNN swap on sonar_hold_cross_eq (seed 12): at the end of the memory mode both
 tracks' gates are wide (bearing sigma 1.8 deg, amplitude sigma 13 dB after 135 s of
 coasting), GNN gives the track of the detected target a clutter detection 3.5 deg off and
@@ -58,7 +61,11 @@ re-enters the ambiguity beside the other track and coasts onto the other target.
 those pairs before the GNN instead of dropping them after it fixed that run but gave
 swaps on cross_uneq (1), cross_turn (2), cross_slow (1) (after the own-ship turn both
 coasting predictions are off by 2 deg, and the nearest-prediction rule then picks the
-wrong target), so it was not kept. The MHT breaks on hold5 (3 runs) remain.
+wrong target), so it was not kept; updating the amplitude during the memory mode (alpha on
+the bearing only) gave 2 swap runs on cross_eq and was not kept either. The MHT breaks on
+hold5 (3 runs, seeds 3, 9, 18) are confirmed tracks deleted by the SPRT counter after a
+run of missed detections (seed 9: contact 3 undetected 4 cycles in a row at the North
+crossing) and replaced by a new number: the deletion rule, not the crossings.
 
 Goals (exit code 1 when one fails): false confirmed tracks < 1 per 100 cycles on every
 scene; breaks 0 in >= 95 % of runs; swaps 0 in every run.

@@ -32,11 +32,13 @@ def branch(x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray, model
            T: float, sojourn: np.ndarray, quiet: np.ndarray) -> tuple[np.ndarray, ...]:
     """Every hypothesis (x (H, n), P, weight c, track, model label) continued in each of the
     M models over a cycle of T s (the hypotheses flagged in `quiet` (H,) in the quiet model
-    0 only: the others' branches get weight 0): the (M H) branches x, P, c p_mj, track,
-    label j, and the index of each branch's source hypothesis."""
+    0 only): the branches x, P, c p_mj, track, label j, and the index of each branch's
+    source hypothesis."""
     M, Hn = sojourn.size, c.size
     p = transition(np.full(Hn, T), sojourn)  # (H, M, M): p[h, i, j] = P(i -> j)
     p[quiet] = np.eye(M)[0]  # every model -> model 0
     src = np.tile(np.arange(Hn), M)
     to = np.repeat(np.arange(M), Hn)
-    return x[src], P[src], c[src] * p[src, model[src], to], track[src], to, src
+    w = p[src, model[src], to]
+    src, to, w = src[w > 0], to[w > 0], w[w > 0]
+    return x[src], P[src], c[src] * w, track[src], to, src
