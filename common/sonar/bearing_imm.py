@@ -12,8 +12,9 @@ crossing management use the combined (moment-matched) prediction; each model is 
 with the associated detection and the same 004 gain weight alpha; a track without a
 detection (or with alpha = 0) keeps the predicted model probabilities.
 
-Memory mode (004 claim 5, "the parameters of the prediction no longer evolve"): a track
-in it predicts with the quiet Q in both models. With the manoeuvre Q its covariance
+Memory mode (004 claim 5; the description of Etp2's first mode, margin 25: "los parametros
+para el calculo de prediccion de posicion ya no evolucionan"): a track in it predicts with
+the quiet Q in both models (deviation: 004 has no Q at all; core.crossing deviation iii). With the manoeuvre Q its covariance
 grew by q_theta over the whole crossing although no detection could show a manoeuvre,
 so the coasting tracks' gates spread over both targets and the first detections after
 the ambiguity re-associated wrongly (GNN swaps on sonar_hold_cross_eq / _slow).

@@ -3,7 +3,8 @@ the bearing tracker's IMM (common.sonar.bearing_imm: the Q of 000 with a quiet a
 manoeuvre bearing noise power, mean sojourn times), carried as a model label on every
 hypothesis.
 
-Choice (stated; 000's MHT has the one straight-line-segment model with one Q): each cycle
+Choice (stated; 000's MHT block 42 uses "un modelo de proceso predeterminado", the one
+straight-line-segment model with one Q): each cycle
 every hypothesis continues in each model j with the weight c_ih p_mj (p: the Markov chain of
 the models over the cycle, common.core.imm.transition; m its model) and is predicted with
 the Q of model j; hypotheses of different models are never merged (the 000 hypothesis
