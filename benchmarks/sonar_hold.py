@@ -62,7 +62,11 @@ those pairs before the GNN instead of dropping them after it fixed that run but 
 swaps on cross_uneq (1), cross_turn (2), cross_slow (1) (after the own-ship turn both
 coasting predictions are off by 2 deg, and the nearest-prediction rule then picks the
 wrong target), so it was not kept; updating the amplitude during the memory mode (alpha on
-the bearing only) gave 2 swap runs on cross_eq and was not kept either. The MHT breaks on
+the bearing only) gave 2 swap runs on cross_eq and was not kept either; nor was a GNN that
+may leave a confirmed track unassigned (pair cost d^2 - G, a miss 0: the most likely
+assignment by 000's dL instead of the most pairs), which stops a track taking the other
+target's detection when its own is missed (cross_slow seed 26) but at 40 seeds gave the
+same 3 swap runs in all (cross_eq 1, cross_turn 0, cross_slow 2). The MHT breaks on
 hold5 (3 runs, seeds 3, 9, 18) are confirmed tracks deleted by the SPRT counter after a
 run of missed detections (seed 9: contact 3 undetected 4 cycles in a row at the North
 crossing) and replaced by a new number: the deletion rule, not the crossings.
