@@ -32,6 +32,7 @@ class BearingCrossing:
         if band_hz is not None:  # seed 004 c: volume of the (bearing, frequency) space
             params = replace(params, volume=2.0 * math.pi * (band_hz[1] - band_hz[0]))
         self.manager = CrossingManager(params)
+        self.memory = params.mode == "memory"  # 004 claim 5: alpha = 0 while ambiguous
 
     def gains(
         self, t: float, ids: np.ndarray, confirmed: np.ndarray, x: np.ndarray, z: np.ndarray,

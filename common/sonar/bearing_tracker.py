@@ -6,14 +6,14 @@ time only:
   2.-3. gated GNN (common.sonar.bearing_assoc): d^2 = y' S^-1 y (000 d_1^2), gate G per
      pair with P_D from the track's predicted amplitude (000 erfc law) and P_FA from
      the detection's level, global nearest neighbour on d^2 (000 GNN);
-  4. seed 004 crossing management on the confirmed tracks: alpha as gain weight; a
-     track leaving the ambiguity keeps its detection only if no other confirmed track's
+  4. seed 004 crossing management on the confirmed tracks: alpha as gain weight (in
+     memory mode the IMM predicts with its quiet Q, common.sonar.bearing_imm); a track
+     leaving the ambiguity keeps its detection only if no other confirmed track's
      prediction is nearer to it (deviation; common.sonar.bearing_crossing);
   5. Kalman update with the Joseph-form covariance (000 P(k/k));
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
-     for a miss;
-     tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2); confirmed
-     deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
+     for a miss; tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2);
+     confirmed deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
   7. every unassociated detection opens a tentative track, x(1) = H' z, P(1) = P0,
      L(1) = 0 (000 initialisation);
   8. narrowband: multi-line tracks (000 claims 12-13, common.sonar.multiline);
@@ -169,10 +169,8 @@ class BearingTracker:
         self.crossing = (BearingCrossing(crossing or CrossingParams(), self.H,
                                          p.band_hz if self.narrowband else None)
                          if p.crossing else None)
-        self.multiline = (
-            MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
-            if self.narrowband else None
-        )
+        self.multiline = (MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
+                          if self.narrowband else None)
         self.history = BearingHistory(p.history_keep_deleted)
         self.t: float | None = None
         self._next_uid = 0
@@ -219,8 +217,10 @@ class BearingTracker:
         idx = tab.active_indices()
         x, P = tab.x[idx], tab.P[idx]
         T = t - tab.t_last[idx]
-        if idx.size and self.imm is not None:
-            c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T), self._Q)
+        if idx.size and self.imm is not None:  # 004 memory mode: quiet Q in both models
+            memory = tab.ambiguous[idx] & (self.crossing is not None and self.crossing.memory)
+            c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T),
+                                               self._Q, memory)
         elif idx.size:
             x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])

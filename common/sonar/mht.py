@@ -18,7 +18,8 @@ mixture's moments. One `MhtTracker.step` per detection list (clock cycle k -> k+
   9. end of conflicts: a newly confirmed track near a conflicting track is re-linked;
  10. retrodiction over n_retro cycles (common.sonar.retrodiction), which also keeps the
      bearing register served on sonar/history.
-Model, measurement noise and P0 are those of the single-hypothesis mode ([sonar.tracker]).
+Model, measurement noise and P0 are those of the single-hypothesis mode ([sonar.tracker]),
+with its two bearing-rate models as a label per hypothesis (common.sonar.mht_models).
 
 Deviations (stated):
 - Deletion: the seed never deletes a track; a track whose status is tentative is
@@ -73,6 +74,7 @@ from common.core.kalman import predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.bearing_model import detection_probability, measurement_matrix
 from common.sonar.bearing_tracker import Cycle, TrackerParams, detection_measurements
+from common.sonar.mht_models import branch
 from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
                                          miss_weights, mixture_moments, pair_distance2, prune,
                                          sprt, track_sums)
@@ -159,7 +161,11 @@ class MhtTracker:
         n = self.n
         self.hx, self.hP = np.zeros((0, n)), np.zeros((0, n, n))
         self.hc, self.ht = np.zeros(0), np.zeros(0, dtype=np.intp)
-        self.hmeas = np.zeros(0, dtype=np.intp)
+        self.hmeas, self.hm = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+        p = params  # the bearing-rate models of the IMM (common.sonar.mht_models)
+        two = 0.0 < p.q_theta_quiet < p.q_theta
+        self.q_models = (p.q_theta_quiet, p.q_theta) if two else (p.q_theta,)
+        self.sojourn = np.asarray(p.imm_sojourn_s if two else [1.0], dtype=float)
         self.tr = TrackArrays()
         self.retro = Retrodiction(mht.n_retro, params.history_keep_deleted)
         self.t: float | None = None
@@ -172,11 +178,11 @@ class MhtTracker:
     def _F(self, T: float) -> np.ndarray:
         return bearing_freq_F(T) if self.narrowband else bearing_F(T)
 
-    def _Q(self, T: float) -> np.ndarray:
+    def _Q(self, T: float, q_theta: float) -> np.ndarray:
         p = self.params
         if self.narrowband:
-            return bearing_freq_Q(T, p.q_theta, p.q_a, p.q_f)
-        return bearing_Q(T, p.q_theta, p.q_a)
+            return bearing_freq_Q(T, q_theta, p.q_a, p.q_f)
+        return bearing_Q(T, q_theta, p.q_a)
 
     # ------------------------------------------------------------------ cycle
 
@@ -192,7 +198,11 @@ class MhtTracker:
         F = self._F(T)
         self.k += 1
 
-        xp, Pp = predict(self.hx, self.hP, F, self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
+        self.hx, self.hP, self.hc, self.ht, self.hm, src = branch(  # models (mht_models)
+            self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
+        self.hmeas = self.hmeas[src]
+        Qm = np.stack([self._Q(T, q) for q in self.q_models])
+        xp, Pp = predict(self.hx, self.hP, F, Qm[self.hm])  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S = self._gate(xp, Pp, z, Rd)
@@ -215,15 +225,17 @@ class MhtTracker:
             cx, cP, cc, cpar, cmeas = resolve_conflicts(self, xp, Pp, pd, hi, lj, lgN, z, Rd,
                                                         cx, cP, cc, cpar, cmeas)
 
-        ct = self.ht[cpar]
+        ct, cm = self.ht[cpar], self.hm[cpar]
         keep = prune(cc, ct, nT, mp.c_krit, mp.max_hyp_track, mp.max_hyp_cycle)  # 000 c < c_krit
         cx, cP, cc, ct, cpar, cmeas = cx[keep], cP[keep], cc[keep], ct[keep], cpar[keep], cmeas[keep]
+        cm = cm[keep]
         ct = self._split(cx, cP, cc, ct)  # 000 split, may add tracks
-        head = merge_clusters(cx, cP, cc, ct, mp.d_merge_hyp)  # 000 hypothesis merge
+        head = merge_clusters(cx, cP, cc, ct * self.sojourn.size + cm, mp.d_merge_hyp)  # 000 merge
         heads, cx, cP, cc = merge_apply(cx, cP, cc, head)
-        ct, cpar, cmeas = ct[heads], cpar[heads], cmeas[heads]
-        self.hx, self.hP, self.hc, self.ht, self.hmeas = cx, cP, cc, ct, cmeas
+        ct, cpar, cmeas, cm = ct[heads], cpar[heads], cmeas[heads], cm[heads]
+        self.hx, self.hP, self.hc, self.ht, self.hmeas, self.hm = cx, cP, cc, ct, cmeas, cm
         x_pre, P_pre = xp[cpar], Pp[cpar]
+        cpar = src[cpar]  # the retrodiction's parents: the hypotheses of the previous cycle
 
         unused = np.ones(z.shape[0], dtype=bool)
         unused[lj] = False
@@ -257,7 +269,7 @@ class MhtTracker:
         live_h = ~drop[self.ht]
         remap = np.cumsum(~drop) - 1
         self.hx, self.hP, self.hc = self.hx[live_h], self.hP[live_h], self.hc[live_h]
-        self.ht, self.hmeas = remap[self.ht[live_h]], self.hmeas[live_h]
+        self.ht, self.hmeas, self.hm = remap[self.ht[live_h]], self.hmeas[live_h], self.hm[live_h]
         x_pre, P_pre, cpar, det = x_pre[live_h], P_pre[live_h], cpar[live_h], det[live_h]
         tr.keep(~drop)
         det[tr.IN[self.ht] >= 0] = np.nan  # a resolution conflict's detections may be the other's
@@ -312,6 +324,7 @@ class MhtTracker:
         self.hc = np.concatenate([self.hc, np.ones(k)])
         self.ht = np.concatenate([self.ht, slots])
         self.hmeas = np.concatenate([self.hmeas, np.full(k, -1, dtype=np.intp)])
+        self.hm = np.concatenate([self.hm, np.zeros(k, dtype=np.intp)])
 
     def _split(self, x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray) -> np.ndarray:
         """000 track split: when the two heaviest hypotheses of a track are farther than
