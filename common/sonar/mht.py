@@ -23,8 +23,10 @@ with its two bearing-rate models as a label per hypothesis (common.sonar.mht_mod
 
 Deviations (stated):
 - Deletion: the seed never deletes a track; a track whose status is tentative is
-  deleted after `n_delete` cycles in a row without LR > B, and any track whose bearing
-  sigma exceeds `sigma_max_deg` (a target lost for good would otherwise coast forever).
+  deleted after `n_delete` cycles in a row as tentative without LR > B (a confirmed track
+  that SA demotes gets those cycles too: its misses while still confirmed do not count),
+  and any track whose bearing sigma exceeds `sigma_max_deg` (a target lost for good would
+  otherwise coast forever).
 - "Covariances not excessive" (track merge): both bearing sigmas below
   `merge_sigma_max_deg`.
 - Order: conflicts are handled before pruning (the seed: after the usual Kalman update),
@@ -110,7 +112,8 @@ class MhtParams:
     A, B: SPRT limits of LR (ZA - 1 below A, ZA + 1 above B).
     za_krit: ZA above which a track is confirmed.
     za_max: cap of ZA.
-    n_delete: a tentative track is deleted after this many cycles in a row without LR > B.
+    n_delete: a tentative track is deleted after this many cycles in a row as tentative
+        without LR > B (a demoted confirmed track too, counted from its demotion).
     sigma_max_deg: a track whose bearing sigma exceeds this is deleted (deg).
     merge_sigma_max_deg: bearing sigmas below which covariances are "not excessive" for
         the track merge (deg).
@@ -256,7 +259,7 @@ class MhtTracker:
         tr.ZA, tr.SA, norm = sprt(np.where(dup, np.minimum(LR, mp.B), LR), tr.ZA, tr.SA,
                                   mp.A, mp.B, mp.za_krit, mp.za_max)
         self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
-        tr.no_b = np.where(norm, 0, tr.no_b + 1)
+        tr.no_b = np.where(norm | (tr.SA == 1), 0, tr.no_b + 1)  # counted while tentative only
         conflict_flags(self)
         newly = np.flatnonzero((tr.SA == 1) & (was == 0))
         drop = relink(self, newly)

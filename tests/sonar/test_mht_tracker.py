@@ -225,3 +225,28 @@ def test_register_holds_the_targets_own_detections_with_their_sigma():
     np.testing.assert_allclose(h["sbrg"], DEG)  # the detections' sigma (cylindrical array)
     np.testing.assert_array_equal(h["own_x"], h["t"])
     np.testing.assert_array_equal(h["own_y"], -h["t"])
+
+
+def test_a_confirmed_track_missed_za_max_minus_za_krit_plus_one_cycles_keeps_its_number():
+    """ZA at its cap falls below ZA_krit after za_max - za_krit + 1 misses (SA demotes the
+    track); the n_delete cycles of a tentative track count from the demotion, so the track
+    survives, is confirmed again by its next detections and keeps its number. It is deleted
+    at its n_delete-th cycle as tentative without LR > B, the demotion cycle the first."""
+    mp = MhtParams()
+    misses = mp.za_max - mp.za_krit + 1
+    cyc = scene([1.0], [0.0], 40, seed=5)
+    for lost in (misses, misses + mp.n_delete - 2, misses + mp.n_delete - 1):
+        trk = tracker()
+        for t, b, a, _ in cyc[:20]:
+            c = trk.step(t, b, a, 0.0)
+        ident = int(c.ids[c.confirmed][0])
+        for k in range(20, 20 + lost):
+            c = trk.step(cyc[k][0], np.zeros(0), np.zeros(0), 0.0)
+        assert not c.confirmed.any()
+        if lost == misses + mp.n_delete - 1:
+            assert ident not in c.ids.tolist()
+            continue
+        assert c.ids.tolist() == [ident]
+        for t, b, a, _ in cyc[20 + lost:]:
+            c = trk.step(t, b, a, 0.0)
+        assert c.ids[c.confirmed].tolist() == [ident]
