@@ -67,23 +67,23 @@ def test_killed_tracker_and_fusion_restarted_by_run(tmp_path: Path) -> None:
         return next((b for a, b in zip(times, times[1:]) if b - a > SCAN_S + 1e-9), None)
 
     try:
-        col.wait_for("confirmed global tracks", lambda: newest("radar/gtracks") >= 25, run)
+        run.wait_for("confirmed global tracks", lambda: newest("radar/gtracks") >= 25)
         [tracker] = run.pids("elementary-tracker/b1")
         os.kill(tracker, signal.SIGKILL)
         t_kill = newest("radar/gtracks")
-        col.wait_for("b1's restart", lambda: len(run.pids("elementary-tracker/b1")) == 2, run)
+        run.wait_for("b1's restart", lambda: len(run.pids("elementary-tracker/b1")) == 2)
         t_restart = max(newest(f"radar/etracks/{b}") for b in REMAINING)
-        col.wait_for("b1 back", lambda: restarted("radar/etracks/b1", t_kill) is not None, run)
+        run.wait_for("b1 back", lambda: restarted("radar/etracks/b1", t_kill) is not None)
         b1_first = restarted("radar/etracks/b1", t_kill)
-        col.wait_for("5 more scans", lambda: newest("radar/gtracks") >= b1_first + 6, run)
+        run.wait_for("5 more scans", lambda: newest("radar/gtracks") >= b1_first + 6)
         [fusion] = run.pids("global-fusion")
         os.kill(fusion, signal.SIGKILL)
         t_fkill = newest("radar/gtracks")
-        col.wait_for("fusion's restart", lambda: len(run.pids("global-fusion")) == 2, run)
+        run.wait_for("fusion's restart", lambda: len(run.pids("global-fusion")) == 2)
         t_frestart = max(newest(f"radar/etracks/{b}") for b in ("b1", *REMAINING))
-        col.wait_for("20 cycles of the new fusion",
+        run.wait_for("20 cycles of the new fusion",
                      lambda: newest("radar/gtracks") >= (restarted("radar/gtracks", t_fkill)
-                                                         or np.inf) + 20, run, timeout=120)
+                                                         or np.inf) + 20, timeout=120)
         assert not col.of("sim/status"), "the scenario ended too early"
     finally:
         col.close()
