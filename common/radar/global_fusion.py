@@ -89,7 +89,7 @@ from common.core.gating import chi2_gate
 from common.radar.global_assoc import (ETrackSet, component_gate, gated_component_pairs,
                                        gated_pairs, resolve)
 from common.radar.global_filter import MixtureFilter
-from common.radar.global_merge import duplicate_pairs
+from common.radar.global_merge import duplicate_pairs, explained
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_report import GlobalTracks, etrack_set
 from common.core.track_table import Status, TrackTable
@@ -377,13 +377,14 @@ class GlobalFusion:
         dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
         a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                                tab.has[live], self.gamma_max)  # common.radar.global_merge
-        if a.size:
-            first = tab.born[live[a]] <= tab.born[live[b]]  # the older keeps its number
-            keep, drop = np.where(first, live[a], live[b]), np.where(first, live[b], live[a])
-            tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
-            tab.has[keep] |= tab.has[drop]
-            tab.score[keep] += tab.score[drop]
-            dead = np.union1d(dead, drop)
+        first = tab.born[live[a]] <= tab.born[live[b]]  # the older keeps its number
+        k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
+                               self.tx, self.rx, self.az_gate, self.gamma_max, np.r_[a, b])
+        keep, drop = live[np.r_[np.where(first, a, b), k]], live[np.r_[np.where(first, b, a), d]]
+        tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
+        tab.has[keep] |= tab.has[drop]
+        tab.score[keep] += tab.score[drop]
+        dead = np.union1d(np.union1d(dead, drop), live[gone])
         if dead.size:
             self.crossing.forget(tab.id[dead])
             tab.remove(dead)
