@@ -42,8 +42,13 @@ faster than the one above): 20x: 600 scans, kept up (last gtracks 0.03 s after i
 plots), 0 lost, 0 missed, 0 rejected, end to end p50 / p99 33 / 335 ms; 30x: 960 scans,
 kept up, 0 lost, 130 / 542 ms; 40x: 1200 scans, 0 lost, the last scan 2.3 s after its
 plots (end to end p50 2.8 s: the ceiling is between 30x and 40x).
+dense1000 (--scene dense1000, 1000 targets, 120 scans, idle machine, after the ghost
+clean-up of common.radar.global_merge): 2x, 4x and 6x kept up (last gtracks 0.15-0.17 s
+after its plots), 0 lost, 0 missed, 0 rejected; end to end p50 / p99 138 / 2740 ms,
+136 / 3633 ms, 986 / 3830 ms (the p99: the cycles that initialise 1000 tracks; global
+fusion handling p50 / p99 5 / 133 ms at 2x).
 
-Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N]
+Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N] [--scene NAME]
 """
 
 from __future__ import annotations
@@ -60,8 +65,7 @@ from soak import REPO, Observer, counters_table, failures, start_chain, wait_cou
 from common.deploy.config import load as load_config
 from common.bus.local_run import Deployment
 
-DENSE = REPO / "scenarios" / "dense.toml"
-RUN_SCANS = 120  # dense.toml: 120 x 1 s
+RUN_SCANS = 120  # the dense scenes (dense, dense300, dense1000): 120 x 1 s
 STALL_S = 30.0  # after the input: wait for the last global tracks while any arrive
 
 
@@ -71,16 +75,17 @@ def pct(x: list[float]) -> str:
     return f"{np.percentile(a, 50):8.1f} / {np.percentile(a, 99):8.1f}" if a.size else "       - /        -"
 
 
-def load(speed: float, seconds: float, seed: int) -> int:
-    """Run the chain at ``speed`` x real time for ``seconds`` of wall time; print the
-    tables; return the exit code."""
+def load(speed: float, seconds: float, seed: int, scene: str = "dense") -> int:
+    """Run the chain of scenarios/<scene>.toml at ``speed`` x real time for ``seconds`` of
+    wall time; print the tables; return the exit code."""
+    scene_path = REPO / "scenarios" / f"{scene}.toml"
     scans = int(round(speed * seconds))
     repeat = -(-scans // RUN_SCANS)  # whole runs of the scenario: seconds rounded up
     with tempfile.TemporaryDirectory() as tmp, Deployment(Path(tmp)) as d:
-        pids = start_chain(d, DENSE)
+        pids = start_chain(d, scene_path)
         services = len(pids) - 1
         obs = Observer(d, ["radar/plots/**", "radar/fused/*", "radar/etracks/*", "radar/gtracks"])
-        sim = d.start("simulate", "simulate", "--config", str(DENSE), "--scenario", str(DENSE),
+        sim = d.start("simulate", "simulate", "--config", str(scene_path), "--scenario", str(scene_path),
                       "--seed", str(seed), "--speed", repr(speed), "--scans", str(min(scans, RUN_SCANS)),
                       "--repeat", str(repeat), "--wait-alive", "test/collector")
         while sim.alive():
@@ -102,7 +107,7 @@ def load(speed: float, seconds: float, seed: int) -> int:
         time.sleep(2.0)  # a late message of another key
         obs.drain()
         wait_counters(obs, services, time.monotonic())
-        bases = [b.id for b in load_config(DENSE).bases]
+        bases = [b.id for b in load_config(scene_path).bases]
         lost, missed, rejected = failures(obs, expected, "radar/gtracks")
         lost += len(set(expected) - set(plots))
         for stage in ("fused", "etracks"):
@@ -122,7 +127,7 @@ def load(speed: float, seconds: float, seed: int) -> int:
     wall_in = max(plots.values()) - min(plots.values())
     backlog = gt.get(t_last, np.inf) - plots.get(t_last, np.inf)
     kept_up = backlog <= 1.0 + 0.05 * wall_in
-    print(f"load: {DENSE.name} at {speed:g}x real time: {len(expected)} scans published in {wall_in:.1f} s "
+    print(f"load: {scene_path.name} at {speed:g}x real time: {len(expected)} scans published in {wall_in:.1f} s "
           f"wall = {(len(plots) - 1) / wall_in:.1f} scans/s (seed {seed}, {repeat} runs of the scenario)")
     print(f"{'latency, ms':<44} {'p50 /      p99':>19}")
     print(f"{'plots -> global tracks (end to end)':<44} {pct(end_to_end)}")
@@ -146,10 +151,11 @@ def main() -> int:
     ap.add_argument("--speed", type=float, default=10.0, help="times the scenario's real-time rate")
     ap.add_argument("--seconds", type=float, default=60.0, help="wall time of the input")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--scene", default="dense", help="scenarios/<scene>.toml: dense, dense300, dense1000")
     args = ap.parse_args()
     if args.speed <= 0 or args.speed * args.seconds < 2:
         ap.error("--speed must be > 0 and --speed x --seconds >= 2 scans")
-    return load(args.speed, args.seconds, args.seed)
+    return load(args.speed, args.seconds, args.seed, args.scene)
 
 
 if __name__ == "__main__":
