@@ -110,6 +110,13 @@ class TrackTable:
         self.status[idx] = Status.TENTATIVE
         return idx
 
+    def copy_rows(self, src: ArrayLike, dst: ArrayLike, skip: tuple[str, ...] = ("id",)) -> None:
+        """Copy every column of slots src into slots dst, but the columns named in skip."""
+        for name in self._specs:
+            if name not in skip:
+                col = getattr(self, name)
+                col[dst] = col[src]
+
     def remove(self, indices: ArrayLike) -> None:
         """Delete the tracks in these slots and release their numbers."""
         idx = np.asarray(indices, dtype=np.intp)

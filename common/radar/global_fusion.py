@@ -89,7 +89,7 @@ from common.core.gating import chi2_gate
 from common.radar.global_assoc import (ETrackSet, component_gate, gated_component_pairs,
                                        gated_pairs, resolve)
 from common.radar.global_filter import MixtureFilter
-from common.radar.global_merge import duplicate_pairs, explained
+from common.radar.global_merge import duplicate_pairs, explained, number_kept
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_report import GlobalTracks, etrack_set
 from common.core.track_table import Status, TrackTable
@@ -384,9 +384,12 @@ class GlobalFusion:
         tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
         tab.has[keep] |= tab.has[drop]
         tab.score[keep] += tab.score[drop]
+        mv = number_kept(tab.confirmed[keep], tab.confirmed[drop])  # global_merge
+        tab.copy_rows(keep[mv], drop[mv], ("id", "born"))
+        keep, drop = np.where(mv, drop, keep), np.where(mv, keep, drop)
         dead = np.union1d(np.union1d(dead, drop), live[gone])
         if dead.size:
-            self.crossing.forget(tab.id[dead])
+            self.crossing.forget(tab.id[np.union1d(dead, keep[mv])])
             tab.remove(dead)
         self.t_last = t
         s = tab.active_indices()

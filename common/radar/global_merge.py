@@ -34,10 +34,19 @@ weak altitude geometry of one receiver (a 3 km altitude error gives gamma 3-8 of
 only, tests/radar/test_global_ghosts.py's geometry) lets such a track go on passing
 [48] with its own elementary tracks. The test: every elementary track of one track
 passes [48] against a live component of the other's mixture, and not the reverse; the
-track that explains the other keeps its number and state and takes its elementary
-tracks. A track still holding both targets' elementary tracks, each explained by
+track that explains the other keeps its state (and number, but for `number_kept`) and
+takes its elementary tracks. A track still holding both targets' elementary tracks, each explained by
 another track, is deleted: 001 module 61 removes "aberrant" global tracks without
 saying how they are found.
+
+Numbers (`number_kept`): when only the dropped track of a merged pair is confirmed, the
+kept track (its state, elementary tracks and confirmation) takes the dropped track's
+number and birth time. Measured on dense1000.toml (seed 1, 120 s, the elementary tracks
+labelled with the truth): 8 of the 77 number switches were a confirmed track, assigned
+to a target, explained by a tentative track just started from that target's free
+elementary tracks (6 of the 28 merges of `explained`): the target changed number when
+its new track was confirmed. The kept track stays tentative until confirmed (moving the
+confirmation too made false tracks and NEES worse).
 """
 
 from __future__ import annotations
@@ -132,3 +141,9 @@ def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, ro
     dissolve = (covered.sum(axis=1) == n_meas) & (n_meas >= 2) & ~explains_one & ~used
     return (np.array(keep, dtype=np.intp), np.array(drop, dtype=np.intp),
             np.flatnonzero(dissolve))
+
+
+def number_kept(keep_confirmed: np.ndarray, drop_confirmed: np.ndarray) -> np.ndarray:
+    """Mask of the merged pairs (keep, drop) whose kept track goes under drop's number
+    and birth time: drop confirmed and keep not (module doc)."""
+    return drop_confirmed & ~keep_confirmed

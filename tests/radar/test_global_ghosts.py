@@ -8,8 +8,10 @@ from __future__ import annotations
 import numpy as np
 
 from common.core.gating import chi2_gate
+from common.deploy.config import RadarBase
 from common.radar.bistatic import project
 from common.radar.global_assoc import ETrackSet, component_gamma
+from common.radar.global_fusion import FusionParams, GlobalFusion
 from common.radar.global_merge import duplicate_pairs, explained
 
 GAMMA = chi2_gate(0.999, 3)
@@ -76,3 +78,28 @@ def test_a_track_of_two_targets_elementary_tracks_is_dissolved() -> None:
     _, _, gone = explained(np.ones((3, 1)), xc, Pc, has, row, E, TX, RX, np.radians(3.0), GAMMA,
                            np.array([2]))
     assert gone.size == 0  # busy: in a Cartesian pair
+
+
+def test_the_merged_pair_keeps_the_confirmed_number() -> None:
+    """The confirmed ghost (slot 1, base 2, 8 km up) is explained by the target's
+    tentative track (slot 0, bases 0, 1) started this cycle: one track is left, with the
+    target's state, all three bases and confirmation (tentative), under the ghost's
+    number and birth time (global_merge.number_kept; dense1000.toml: 6 of 77 switches)."""
+    gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(4)],
+                      FusionParams())
+    tab = gf.table
+    E = _etracks(np.tile(TRUTH, (3, 1)), np.array([0, 1, 2]))
+    ghost = TRUTH + [0.0, 0.0, 0.0, 0.0, 8000.0, 0.0]
+    slots = tab.add(2)
+    P = np.diag([200.0**2, 10.0**2, 200.0**2, 10.0**2, 300.0**2, 3.0**2])
+    tab.x[slots], tab.P[slots] = np.stack([TRUTH, ghost]), P
+    tab.xm[slots], tab.Pm[slots] = tab.x[slots][:, None], P
+    tab.mu[slots] = np.eye(1, tab.mu.shape[1])
+    tab.Pm[1, 0, 4, 4] = 150.0**2
+    tab.has[slots] = [[True, True, False, False], [False, False, True, False]]
+    tab.member[slots] = [[0, 1, 0, 0], [0, 0, 2, 0]]
+    tab.confirmed[slots], tab.born[slots] = [False, True], [10.0, 2.0]
+    out = gf._manage(10.0, E, np.array([[0, 1, -1, -1], [-1, -1, 2, -1]]))
+    assert out.id.tolist() == [tab.id[1]] and not tab.confirmed[1] and tab.born[1] == 2.0
+    np.testing.assert_array_equal(out.x[0], TRUTH)
+    assert out.has[0].tolist() == [True, True, True, False]
