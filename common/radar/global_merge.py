@@ -35,9 +35,9 @@ only, tests/radar/test_global_ghosts.py's geometry) lets such a track go on pass
 [48] with its own elementary tracks. The test: every elementary track of one track
 passes [48] against a live component of the other's mixture, and not the reverse; the
 track that explains the other keeps its state (and number, but for `number_kept`) and
-takes its elementary tracks. A track still holding both targets' elementary tracks, each explained by
-another track, is deleted: 001 module 61 removes "aberrant" global tracks without
-saying how they are found.
+takes its elementary tracks. A track still holding both targets' elementary tracks,
+each explained by another track, is deleted: 001 module 61 removes "aberrant" global
+tracks without saying how they are found.
 
 Numbers (`number_kept`): when only the dropped track of a merged pair is confirmed, the
 kept track (its state, elementary tracks and confirmation) takes the dropped track's

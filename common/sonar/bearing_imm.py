@@ -14,8 +14,9 @@ detection (or with alpha = 0) keeps the predicted model probabilities.
 
 Memory mode (004 claim 5; the description of Etp2's first mode, margin 25: "los parametros
 para el calculo de prediccion de posicion ya no evolucionan"): a track in it predicts with
-the quiet Q in both models (deviation: 004 has no Q at all; core.crossing deviation iii). With the manoeuvre Q its covariance
-grew by q_theta over the whole crossing although no detection could show a manoeuvre,
+the quiet Q in both models (deviation: 004 has no Q at all; core.crossing deviation
+iii). With the manoeuvre Q its covariance grew by q_theta over the whole crossing
+although no detection could show a manoeuvre,
 so the coasting tracks' gates spread over both targets and the first detections after
 the ambiguity re-associated wrongly (GNN swaps on sonar_hold_cross_eq / _slow).
 """
@@ -48,9 +49,11 @@ class BearingImm:
         model; the quiet Q in both models for the tracks flagged in `memory` (N,), 004
         memory mode): predicted probabilities c (N, 2), xm, Pm, combined x (N, n), P."""
         c, x0, P0 = mix(mu, _near(xm, xm[:, :1]), Pm, transition(T, self.sojourn))
-        quiet = np.zeros(T.shape, dtype=bool) if memory is None else memory
+        Q_quiet = Q(T, self.q[0])
         for j, q in enumerate(self.q):
-            Qj = np.where(quiet[:, None, None], Q(T, self.q[0]), Q(T, q))
+            Qj = Q_quiet if j == 0 else Q(T, q)
+            if j and memory is not None:
+                Qj = np.where(memory[:, None, None], Q_quiet, Qj)
             x0[:, j], P0[:, j] = predict(x0[:, j], P0[:, j], F, Qj)
             x0[:, j, 0] = wrap_2pi(x0[:, j, 0])
         x, P = combine(c, _near(x0, x0[:, :1]), P0)
