@@ -24,7 +24,9 @@ Cycle at t (001 figure 7):
   module 63: confirm or dissociate the memberships ([48] <= gamma_max in one live
     component of the track's mixture: a stated deviation), then add
     free elementary tracks of non-contributing bases, including to tracks in pure
-    prediction (resolution loop);
+    prediction (resolution loop); a base whose elementary tracks of two tracks pass
+    [48] against each other's track is not used by either this scan
+    (global_assoc.ambiguous_members says why);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
     [46]); candidates that can be extended to more bases win conflicts, then lower
     residual; a candidate's conflicts include the elementary tracks of the other bases
@@ -86,10 +88,10 @@ from common.core.crossing import CrossingManager, CrossingParams
 from common.radar.decorrelation import Decorrelator
 from common.radar.elementary import ElementaryParams, ElementaryTracks
 from common.core.gating import chi2_gate
-from common.radar.global_assoc import (ETrackSet, component_gate, gated_component_pairs,
-                                       gated_pairs, resolve)
+from common.radar.global_assoc import (ETrackSet, ambiguous_members, component_gate,
+                                       gated_component_pairs, gated_pairs, resolve)
 from common.radar.global_filter import MixtureFilter
-from common.radar.global_merge import duplicate_pairs, explained, number_kept
+from common.radar.global_merge import merge_tracks
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_report import GlobalTracks, etrack_set
 from common.core.track_table import Status, TrackTable
@@ -236,7 +238,10 @@ class GlobalFusion:
             for k in range(used.shape[1]):
                 row[new, E.base[used[:, k]]] = used[:, k]
             self._extend(new, (c, xm, Pm), E, reported, free, row)
-        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row)
+        old = np.setdiff1d(tab.active_indices(), new)
+        amb = ambiguous_members(c, xm, Pm, x, P, row, old, E, self.tx, self.rx, self.az_gate,
+                                self.gamma_max)
+        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row, amb)
         return self._manage(t, E, row)
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -336,14 +341,14 @@ class GlobalFusion:
 
     def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
                 P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
-                row: np.ndarray) -> None:
+                row: np.ndarray, amb: np.ndarray) -> None:
         """Localisation (64) per altitude band, crossing test (004) on the combined
         prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
         MixtureFilter.predict), new weights, pruning and merging at t (global_filter);
         status of the tracks."""
         tab = self.table
         r = row[live]
-        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None]
+        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None] & ~amb[live]
         n_act = active.sum(1)
         multi, single = n_act >= 2, n_act == 1
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
@@ -375,21 +380,11 @@ class GlobalFusion:
         tab.score[live] = np.append(E.score, 0.0)[r].sum(axis=1)  # module 61
         orphan = ~tab.has[live].any(axis=1)
         dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
-        a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
-                               tab.has[live], self.gamma_max)  # common.radar.global_merge
-        first = tab.born[live[a]] <= tab.born[live[b]]  # the older keeps its number
-        k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
-                               self.tx, self.rx, self.az_gate, self.gamma_max, np.r_[a, b])
-        keep, drop = live[np.r_[np.where(first, a, b), k]], live[np.r_[np.where(first, b, a), d]]
-        tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
-        tab.has[keep] |= tab.has[drop]
-        tab.score[keep] += tab.score[drop]
-        mv = number_kept(tab.confirmed[keep], tab.confirmed[drop])  # global_merge
-        tab.copy_rows(keep[mv], drop[mv], ("id", "born"))
-        keep, drop = np.where(mv, drop, keep), np.where(mv, keep, drop)
-        dead = np.union1d(np.union1d(dead, drop), live[gone])
+        gone, renamed = merge_tracks(tab, live, r, E, self.tx, self.rx, self.az_gate,
+                                     self.gamma_max)  # common.radar.global_merge
+        dead = np.union1d(dead, gone)
         if dead.size:
-            self.crossing.forget(tab.id[np.union1d(dead, keep[mv])])
+            self.crossing.forget(tab.id[np.union1d(dead, renamed)])
             tab.remove(dead)
         self.t_last = t
         s = tab.active_indices()

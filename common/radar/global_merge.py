@@ -54,6 +54,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from common.core.track_table import TrackTable
+from common.radar.bistatic import POS
 from common.radar.global_assoc import ETrackSet, gated_component_pairs
 
 
@@ -147,3 +149,25 @@ def number_kept(keep_confirmed: np.ndarray, drop_confirmed: np.ndarray) -> np.nd
     """Mask of the merged pairs (keep, drop) whose kept track goes under drop's number
     and birth time: drop confirmed and keep not (module doc)."""
     return drop_confirmed & ~keep_confirmed
+
+
+def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
+                 tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Both tests on the live tracks (slots `live` of the global track table, r their rows
+    of E): the kept track of each pair takes the other's elementary tracks and score (the
+    older one keeps its number, but for `number_kept`). Returns (slots to delete: the
+    merged-away and the dissolved tracks, slots now under another number)."""
+    a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
+                           tab.has[live], gamma)
+    first = tab.born[live[a]] <= tab.born[live[b]]
+    k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
+                           tx, rx, az_gate, gamma, np.r_[a, b])
+    keep, drop = live[np.r_[np.where(first, a, b), k]], live[np.r_[np.where(first, b, a), d]]
+    tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
+    tab.has[keep] |= tab.has[drop]
+    tab.score[keep] += tab.score[drop]
+    mv = number_kept(tab.confirmed[keep], tab.confirmed[drop])
+    tab.copy_rows(keep[mv], drop[mv], ("id", "born"))
+    keep, drop = np.where(mv, drop, keep), np.where(mv, keep, drop)
+    return np.union1d(drop, live[gone]), keep[mv]
