@@ -105,6 +105,38 @@ its number:
   with the number (the track reported at once): switches 7.1 and breaks 4.6, but false
   7.967 -> 7.978 per scan and NEES 6.0245 -> 6.0261; not kept. The flip-flops of close
   pairs (more than half) come from the altitude error of one receiver's geometry.
+
+Measured 2026-11-26, ambiguous memberships (seed 1 unless said, 120 s, 2 shared cores; CPU
+ms per scan). Traced first (every elementary track against the truths): two aircraft
+540 m apart in plan, 1.7 km in altitude; at t = 5 s base b2's elementary tracks swapped
+and both global tracks, 2 s old, took the other aircraft's (range-rate 8-10 sigma off
+the truth, inside [48] of a young track); the bands collapsed to one 0.6-1.1 km off with
+sigma_z 190-340 m, which the other three bases (ranges within 1 sigma of the truth at
+both altitudes) never corrected: NEES 10-170, then 28 switches of that pair. Fix
+(common.radar.global_assoc.ambiguous_members): a base whose elementary tracks of two
+tracks pass [48] against each other's track is used by neither this scan.
+
+  scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES
+  before (62f13e8):
+  dense1000     1000     8.2    24.5    98.4    7.6   8.7 (0.9%)   8.0 (0.9%)    7.10   5.20   0.99     6.02
+  dense1000 s2  1000     7.9    23.5    97.2    7.8  14.3 (1.5%)  16.0 (1.7%)    7.10   5.60   1.01     4.72
+  after:
+  dense          120     1.6     4.3    15.5   46.7   0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.09
+  dense300       300     2.6     7.3    32.2   23.8   1.5 (0.5%)   2.1 (0.8%)    0.67   3.00   0.92     3.23
+  dense1000     1000     8.2    24.6   113.8    6.8   8.4 (0.9%)   7.5 (0.8%)    4.70   4.90   0.99     3.36
+  dense1000 s2  1000     8.0    24.1   110.2    7.0  12.4 (1.3%)  13.5 (1.4%)    3.80   4.10   1.01     3.25
+  (dense and dense300 before: NEES 3.07 and 3.77, every other quality column equal.)
+  The 47 switches left (seed 1): 35 trade two truths between two live tracks, 19 of
+  them by t = 15 s; in 10 of those the track that lost the truth is still consistent
+  with it (position NEES <= 11.3, chi-square 3 dof at 0.99): two aircraft under 1 km
+  apart in plan whose honest altitude sigma is 0.5-1.1 km, which the Euclidean 3-D
+  assignment of the scoring trades (e.g. t = 9 s: truth 67 at NEES 0.6 from its track,
+  moved to a track at NEES 254 because the pair's summed squared errors were smaller).
+  The rest: a target first scored on a neighbour's track and then on its own (young)
+  track, and 8 track replacements (a track lost, a new one started).
+  Tried and not kept (measured before this fix): q_z 0.1 and 0.01 m^2/s^3 (more altitude integration): switches
+  7.1 -> 7.7, 8.3; stricter confirmation (confirm_cycles 5, 8; confirm_bases 3):
+  switches 5.4, 5.0, 5.5 but missed 1.2, 1.6, 1.1 %.
 """
 
 from __future__ import annotations
