@@ -117,7 +117,8 @@ class FusionParams(InitParams):
         sigma_z < band_linear * height above the receiver (common.radar.global_mixture).
     meas_inflation: factor on R of [50] (1 = as the elementary tracks give it).
     confirm_cycles, confirm_bases: a track is confirmed after this many cycles with
-        at least this many contributing updated elementary tracks.
+        at least this many contributing updated elementary tracks, located together
+        (module 64's test passed: a track of two targets' elementary tracks fails it).
     max_coast: deletion after this many cycles without contributors (module 61).
     max_wait: seconds of wall time without a message after which the service declares
         a base stale (module doc; used by services/global_fusion, not by the core).
@@ -365,7 +366,7 @@ class GlobalFusion:
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
-        tab.n_good[live] += n_act >= self.p.confirm_bases
+        tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
         tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
         reporting = (r >= 0).any(axis=1)  # a contributing elementary track was reported
         tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
