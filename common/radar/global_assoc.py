@@ -222,7 +222,8 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
     Candidates: held elementary tracks whose ranges differ by less than sqrt(gamma_max)
     (2 sigma_i + sigma_m + 2 sigma_j + sigma_m'), sigma_i the range sigma of track i's
     projected moments, and azimuths by less than 2 az_gate (the prefilter of
-    `gated_pairs` both ways): a superset of the mutual [48] pairs, near-linear cost."""
+    `gated_pairs`, both ways): a superset of the mutual pairs that `gated_pairs` would
+    give, at a near-linear cost."""
     amb = np.zeros(row.shape, dtype=bool)
     g = np.sqrt(gamma_max)
     for b in range(row.shape[1]):
@@ -235,10 +236,10 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
         i, j = overlap_pairs(E.y[m, 0] - half, E.y[m, 0] + half)
         near = np.abs(wrap_pi(E.y[m[i], 2] - E.y[m[j], 2])) <= 2.0 * az_gate
         i, j = i[near], j[near]
-        both = np.r_[i, j], np.r_[j, i]  # (track, other's elementary track), both ways
-        tb, rb = np.broadcast_to(tx[b], (both[0].size, 3)), np.broadcast_to(rx[b], (both[0].size, 3))
-        ok = component_gate(w[held[both[0]]], xc[held[both[0]]], Pc[held[both[0]]],
-                            E.y[m[both[1]]], E.R[m[both[1]]], tb, rb, gamma_max)  # [48]
+        a, o = held[np.r_[i, j]], m[np.r_[j, i]]  # track a against the other's et o
+        n = a.size
+        ok = component_gate(w[a], xc[a], Pc[a], E.y[o], E.R[o], np.broadcast_to(tx[b], (n, 3)),
+                            np.broadcast_to(rx[b], (n, 3)), gamma_max)  # [48], both ways
         mutual = ok[:i.size] & ok[i.size:]
         amb[held[i[mutual]], b] = amb[held[j[mutual]], b] = True
     return amb
