@@ -56,13 +56,14 @@ class BandFixes:
     """Module 64 per track and altitude band (n, A): located position (n, A, 3), its
     covariance (n, A, 3, 3), log-likelihood of the scan under the band, passed the
     chi-square test; post: posterior position (n, 3) of the heaviest band that passed
-    (nan where none did)."""
+    (nan where none did); dropped (n, B): contributors left out (MixtureFilter.locate)."""
 
     pos: np.ndarray
     cov: np.ndarray
     ll: np.ndarray
     ok: np.ndarray
     post: np.ndarray
+    dropped: np.ndarray
 
     @property
     def located(self) -> np.ndarray:
@@ -86,6 +87,9 @@ class MixtureFilter:
         self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
         self.chi2_gate = np.array([np.inf] + [chi2_gate(p.gate_prob, k)
                                               for k in range(1, 2 * len(tx) + 1)])
+        # chi-square(1) threshold of the largest of n rows: P(all n <= it) = gate_prob
+        self.max_gate = np.array([np.inf] + [chi2_gate(p.gate_prob ** (1.0 / n), 1)
+                                             for n in range(1, len(tx) + 1)])
 
     def predict(self, tab: TrackTable, t: float, live: np.ndarray) -> tuple[np.ndarray, ...]:
         """IMM mixing and model-matched prediction [55]-[56] of every component of the
@@ -115,9 +119,26 @@ class MixtureFilter:
                r: np.ndarray, active: np.ndarray, E: ETrackSet) -> BandFixes:
         """Module 64 per altitude band of the tracks `multi` (>= 2 active contributors):
         components (xl, Pl, cl) of n tracks, r (n, B) their rows of E, active (n, B) the
-        contributors with an equivalent measurement."""
-        n, A = xl.shape[0], self.A
-        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, A)
+        contributors with an equivalent measurement. A track of >= 3 whose worst v_b row
+        fails the leave-one-out test (`_vb_outlier`) is located again without that base
+        (BandFixes.dropped)."""
+        mass, xb, Pb = global_mixture.band_moments(cl, xl, Pl, self.A)
+        bpos, bcov, bll, bok = self._bands(mass, xb, Pb, multi, r, active, E)
+        drop = self._vb_outlier(mass, xb, Pb, bpos, bcov, bok, r, active, E)
+        k = np.flatnonzero(drop.any(axis=1))
+        if k.size:
+            bpos[k], bcov[k], bll[k], bok[k] = self._bands(mass[k], xb[k], Pb[k], multi[k], r[k],
+                                                           active[k] & ~drop[k], E)
+        located = bok.any(axis=1)
+        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
+        post = np.where(located[:, None], bpos[np.arange(mass.shape[0]), best], np.nan)
+        return BandFixes(bpos, bcov, bll, bok, post, drop)
+
+    def _bands(self, mass: np.ndarray, xb: np.ndarray, Pb: np.ndarray, multi: np.ndarray,
+               r: np.ndarray, active: np.ndarray, E: ETrackSet) -> tuple[np.ndarray, ...]:
+        """Module 64 per live band (masses, moments): located position (n, A, 3), its
+        covariance, log-likelihood of the scan and chi-square test, as in BandFixes."""
+        n, A = mass.shape
         bpos, bpost = np.full((n, A, 3), np.nan), np.full((n, A, 3), np.nan)
         bcov = np.full((n, A, 3, 3), np.nan)
         bll, bok = np.zeros((n, A)), np.zeros((n, A), dtype=bool)
@@ -131,10 +152,33 @@ class MixtureFilter:
                 xb[ti, ai][:, POS], Pb[ti, ai][:, POS][:, :, POS], cons, self.p.z_min)
             bpos[ti, ai], bcov[ti, ai], bpost[ti, ai], bll[ti, ai] = zm, Rm, xpost, ll
             bok[ti, ai] = chi2 <= self.chi2_gate[2 * active[ti].sum(1)]
-        located = bok.any(axis=1)
-        best = np.argmax(np.where(bok, mass, -1.0), axis=1)
-        post = np.where(located[:, None], bpost[np.arange(n), best], np.nan)
-        return BandFixes(bpos, bcov, bll, bok, post)
+        return bpos, bcov, bll, bok
+
+    def _vb_outlier(self, mass: np.ndarray, xb: np.ndarray, Pb: np.ndarray, bpos: np.ndarray,
+                    bcov: np.ndarray, bok: np.ndarray, r: np.ndarray, active: np.ndarray,
+                    E: ETrackSet) -> np.ndarray:
+        """(n, B) the contributor to leave out: in a located track of >= 3 active
+        contributors, the one whose v_b row of [49] fails the leave-one-out test
+        (global_ekf.vb_deletion_residuals, chi-square 1 dof at gate_prob) the most, under
+        the heaviest band that passed. Complement of 001 (stated): the gate [48] tests each
+        elementary track alone, against any component of the mixture; an elementary
+        track that swapped to a neighbour's target at a base whose v_b alone observes
+        vz passes it (the manoeuvre model covers the jump) and is then explained by a
+        false vz, since no other base checks it: the other bases' v_b do."""
+        drop = np.zeros(active.shape, dtype=bool)
+        i = np.flatnonzero(bok.any(axis=1) & (active.sum(axis=1) >= 3))
+        if i.size == 0:
+            return drop
+        a = np.argmax(np.where(bok[i], mass[i], -1.0), axis=1)
+        infl, ri = self.p.meas_inflation, r[i]
+        r2 = global_ekf.vb_deletion_residuals(
+            xb[i, a], Pb[i, a], bpos[i, a], infl * bcov[i, a], E.z[ri, 1],
+            infl * E.Rz[ri, 1, 1], active[i], self.tx, self.rx)
+        worst = np.argmax(r2, axis=1)
+        n = active[i].sum(axis=1)
+        bad = r2[np.arange(i.size), worst] > self.max_gate[n]
+        drop[i[bad], worst[bad]] = True
+        return drop
 
     def update(self, xl: np.ndarray, Pl: np.ndarray, cl: np.ndarray, fix: BandFixes,
                single: np.ndarray, r: np.ndarray, active: np.ndarray, E: ETrackSet,

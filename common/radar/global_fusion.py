@@ -348,6 +348,8 @@ class GlobalFusion:
         multi, single = n_act >= 2, n_act == 1
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
         fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
+        active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
+        tab.has[live] &= ~fix.dropped
         located = fix.located
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
