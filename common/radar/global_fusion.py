@@ -41,8 +41,8 @@ Cycle at t (001 figure 7):
     maximum duration (60 s) and it was never located, a false track holding a
     target's elementary tracks;
   module 64 + 65: per altitude band, localisation from the contributing updated
-    elementary tracks, then the EKF update with [49]-[50] of each component; new
-    weights, pruning and merging of the bands (common.radar.global_filter);
+    elementary tracks (one whose v_b the others contradict is dissociated), then the
+    EKF update [49]-[50] of each component; weights, pruning, merging (global_filter);
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
