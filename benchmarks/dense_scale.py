@@ -139,9 +139,91 @@ tracks pass [48] against each other's track is used by neither this scan.
   dense1000     1000     7.7    23.1   108.9    7.2   8.4 (0.9%)   7.4 (0.8%)    4.40   4.70   0.99     3.36
   dense1000 s2  1000     7.6    22.7   104.6    7.4  12.4 (1.3%)  12.5 (1.3%)    3.60   3.90   1.01     3.25
   (dense and dense300: every quality column unchanged.)
-  Tried and not kept (measured before this fix): q_z 0.1 and 0.01 m^2/s^3 (more altitude integration): switches
-  7.1 -> 7.7, 8.3; stricter confirmation (confirm_cycles 5, 8; confirm_bases 3):
+  Tried and not kept (measured before this fix): q_z 0.1 and 0.01 m^2/s^3 (more
+  altitude integration): switches 7.1 -> 7.7, 8.3; stricter confirmation (confirm_cycles 5, 8; confirm_bases 3):
   switches 5.4, 5.0, 5.5 but missed 1.2, 1.6, 1.1 %.
+
+Measured 2026-11-26, the NEES of dense1000 (seed 1, 120 s; every GOSPA pair with the
+track's members labelled by the nearest truth projected into each base). The mean of
+6.02 is a mean over targets of each target's mean: median 2.53, 3.73 without the 5
+worst targets (1073, 377, 331, 289, 240). Pairs whose track holds another target's
+elementary track at some base: 1.3 % of the samples, 37 % of the summed NEES (mean
+112, altitude part 55); with only pure pairs the mean would be 3.82. The worst were
+all the same mechanism at b2 (Tx at (45, 10) km, where the targets near its
+transmitter get their altitude from b2's range and v_b alone): either b2's elementary
+track swapped to a neighbour after a crossing in b2's space (member number unchanged,
+e.g. 868 / 444 at t = 54: v_b 15 m/s off in one scan), or module 62 extended two
+parallel aircraft 540 m apart in plan (1000 and 467, 1.7 km apart in altitude) with
+each other's b2 track while the altitude was open. The gate [48] of the swapped track
+alone passes (the manoeuvre component covers the jump) and the EKF explains it by a
+false vz (up to 100 m/s with sigma_vz 1.6 m/s) and altitude (errors of 0.5-1.9 km at
+sigma_z 30-130 m). Not the band pruning or the altitude prior: those tracks were
+consistent until the swap. Fix (common.radar.global_filter): the leave-one-out test
+of the v_b rows of [49] (global_ekf.vb_deletion_residuals; chi-square(1) at the
+threshold of the largest of n rows); the worst row that fails is left out of modules
+64-65 and its membership dissociated, module 63 re-associates from the track's state.
+About 2.5 drops per scan on dense1000, 0.1 on dense. CPU ms per scan; two runs per
+seed, before and after interleaved:
+
+  scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES
+  seed 1, before (62f13e8):
+  dense          120     1.3     3.6    11.9   59.7  0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.07
+  dense300       300     2.2     6.5    25.2   29.5  1.5 (0.5%)   2.1 (0.8%)    0.67   3.00   0.92     3.77
+  dense1000     1000     7.6    22.6    96.0    7.9  8.7 (0.9%)   8.0 (0.9%)    7.10   5.20   0.99     6.02
+  seed 1, after:
+  dense          120     1.3     3.4    11.9   60.5  0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.07
+  dense300       300     2.2     6.2    27.0   28.2  1.5 (0.5%)   2.1 (0.8%)    0.67   3.00   0.91     3.21
+  dense1000     1000     7.5    22.3    96.7    7.9  7.6 (0.8%)   6.5 (0.7%)    4.70   4.70   0.97     3.81
+  seed 2, before:
+  dense          120     1.3     3.4    11.6   61.8  0.7 (0.6%)   1.0 (0.9%)    0.83   3.33   0.91     2.86
+  dense300       300     2.2     6.2    26.0   29.1  2.1 (0.8%)   3.0 (1.1%)    1.33   2.33   0.95     3.75
+  dense1000     1000     7.4    22.1    93.8    8.1 14.3 (1.5%)  16.0 (1.7%)    7.10   5.60   1.01     4.72
+  seed 2, after:
+  dense          120     1.3     3.5    12.5   57.7  0.7 (0.6%)   1.0 (0.9%)    0.83   3.33   0.94     2.88
+  dense300       300     2.3     6.5    28.1   27.1  1.6 (0.6%)   2.5 (0.9%)    1.33   2.00   0.95     3.12
+  dense1000     1000     7.8    23.3    99.3    7.7 12.1 (1.3%)  13.2 (1.4%)    6.30   4.90   0.99     3.91
+  dense seed 1: the same to full precision but NEES 3.0739 -> 3.0725. dense seed 2
+  RMSE/PCRLB 0.913 -> 0.939: two crossing aircraft (60, 74) whose mixed tracks of t = 4
+  are now mended (b4 swapped) and kept, so they are scored from t = 5-6 instead of on
+  the new tracks of t = 14-15, i.e. earlier in their convergence; both stay below 1.0.
+  Seeds 3 and 4: dense the same but NEES 3.135 -> 3.137 (seed 3), RMSE/PCRLB 0.903 ->
+  0.908 and NEES 3.058 -> 3.049 (seed 4); dense300 better or equal in every column. dense1000 seed 1: switches returning to an
+  earlier track (flip-flops) 30 -> 14, in the warm-up 34 -> 17 of 71 -> 47; NEES without
+  the 5 worst targets 3.10. What is left: the pair 467 / 239 crossing at t = 37-41 while
+  467's track still holds 1000's b2 track from module 62 (it is dropped at t = 55, when
+  the v_b of the two b2 tracks have drifted apart), 0.58 of the mean NEES; module 62's
+  choice between two gated tracks of one base while the altitude is open is not
+  decided by any measurement of that scan. Tried and not kept: the test on confirmed
+  tracks only (dense1000 switches 6.8, dense seed 2 breaks 3.33 -> 4.17); a row failing
+  in every mixture component instead of the heaviest band (dense1000 NEES 3.98,
+  switches 6.3); dropping only when removing the worst row makes the others pass
+  (dense1000 NEES 3.87 and 3.97 on seeds 1 and 2, false 6.8 and 13.6); the test at
+  0.9999 instead of gate_prob (two_targets and crossing unchanged, but dense1000 NEES
+  3.93 and 4.42 on seeds 1 and 2); extending a new track in module 62 only to a base
+  with a single gated elementary track (dense1000 switches 5.5). The built-in scenes
+  (benchmarks/global_consistency.py, 16 runs): two_targets ANEES 3.03 -> 3.04, crossing
+  2.98 -> 3.00, every target inside its 95 % interval at >= 98 % of the times; pooled
+  RMSE/PCRLB of target 1 1.23 -> 1.24 and 1.25 -> 1.28 (one false drop at t = 64 in
+  seed 1 of both scenes, same noise: a v_b row of 3.8 sigma that carried an altitude
+  correction), target 2 0.96 -> 0.97 and 1.19 -> 1.19.
+
+Both fixes together (the ambiguous memberships and the v_b leave-one-out test, merged
+2026-11-26; CPU ms per scan, 2 shared cores):
+
+  scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES
+  seed 1:
+  dense          120     1.2     3.4    13.3   55.6  0.6 (0.5%)   1.0 (0.9%)    0.00   5.00   0.92     3.08
+  dense300       300     2.1     6.3    28.9   26.8  1.5 (0.5%)   2.1 (0.8%)    0.67   3.00   0.92     3.21
+  dense1000     1000     7.6    22.5   109.3    7.2  7.6 (0.8%)   6.5 (0.7%)    4.30   4.40   0.98     3.03
+  seed 2:
+  dense          120     1.2     3.4    13.3   55.7  0.7 (0.6%)   1.0 (0.9%)    0.83   3.33   0.93     2.87
+  dense300       300     2.1     6.3    28.8   26.8  1.6 (0.6%)   2.0 (0.7%)    1.33   2.00   0.95     3.12
+  dense1000     1000     7.9    23.3   111.1    7.0 11.8 (1.3%)  11.0 (1.2%)    3.50   3.80   1.00     3.70
+  Each alone, dense1000 seeds 1 / 2: ambiguity NEES 3.36 / 3.25, switches 4.4 / 3.6,
+  false 0.8 / 1.3 %; leave-one-out NEES 3.81 / 3.91, switches 4.7 / 6.3, false 0.7 /
+  1.4 %. Through the processes (benchmarks/load.py --scene dense1000, ambiguity fix
+  only, load 3-6 from other work): 2x kept up, 0 lost, end to end p50/p99 196/3224 ms;
+  4x kept up, 0 lost, 1711/5153 ms (the cycles that initialise the 1000 tracks).
 """
 
 from __future__ import annotations

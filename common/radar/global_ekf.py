@@ -72,6 +72,26 @@ def fused_update(
     return x_new, P_new, loglik + 0.5 * np.log(2.0 * np.pi) * (B - active.sum(axis=1))
 
 
+def vb_deletion_residuals(
+    x: np.ndarray, P: np.ndarray, pos: np.ndarray, pos_cov: np.ndarray, vb: np.ndarray,
+    vb_var: np.ndarray, active: np.ndarray, tx: np.ndarray, rx: np.ndarray,
+) -> np.ndarray:
+    """Leave-one-out test of the v_b rows of y [49] (arguments of `fused_update`):
+    r_j^2 = (S^-1 nu)_j^2 / (S^-1)_jj (N, B), the squared innovation of row j against
+    the prediction updated with all the other rows of [49], in its own sigma (chi-square,
+    1 dof, when the rows belong to the track's target); 0 where not active."""
+    n, B = vb.shape
+    h, H = observation(x, tx, rx)
+    nu = np.concatenate([pos - h[:, :3], np.where(active, vb - h[:, 3:], 0.0)], axis=1)
+    H[:, 3:] *= active[..., None]
+    R = np.zeros((n, 3 + B, 3 + B))
+    R[:, :3, :3] = pos_cov
+    R[:, np.arange(3, 3 + B), np.arange(3, 3 + B)] = np.where(active, vb_var, 1.0)  # [50]
+    W = np.linalg.inv(H @ P @ np.swapaxes(H, 1, 2) + R)
+    u = (W @ nu[..., None])[..., 0]
+    return np.where(active, u[:, 3:] ** 2 / np.diagonal(W, axis1=1, axis2=2)[:, 3:], 0.0)
+
+
 def single_base_update(
     x: np.ndarray, P: np.ndarray, y: np.ndarray, R: np.ndarray, tx: np.ndarray, rx: np.ndarray,
     gain_scale: np.ndarray | None = None,

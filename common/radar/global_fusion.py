@@ -43,8 +43,8 @@ Cycle at t (001 figure 7):
     maximum duration (60 s) and it was never located, a false track holding a
     target's elementary tracks;
   module 64 + 65: per altitude band, localisation from the contributing updated
-    elementary tracks, then the EKF update with [49]-[50] of each component; new
-    weights, pruning and merging of the bands (common.radar.global_filter);
+    elementary tracks (one whose v_b the others contradict is dissociated), then the
+    EKF update [49]-[50] of each component; weights, pruning, merging (global_filter);
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
@@ -354,6 +354,8 @@ class GlobalFusion:
         multi, single = n_act >= 2, n_act == 1
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
         fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
+        active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
+        tab.has[live] &= ~fix.dropped
         located = fix.located
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],

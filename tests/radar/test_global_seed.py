@@ -137,7 +137,7 @@ def test_update_is_58_62_with_the_observation_49_50() -> None:
     E = SimpleNamespace(z=np.column_stack([np.zeros(B), vb, np.zeros(B)]),
                         Rz=np.tile(np.diag([1.0, 0.49, 1.0]), (B, 1, 1)))
     fix = BandFixes(pos[None, None], pos_cov[None, None], np.zeros((1, 1)),
-                    np.ones((1, 1), bool), pos[None])
+                    np.ones((1, 1), bool), pos[None], np.zeros((1, B), bool))
     active = np.ones((1, B), bool)
     active[0, 2] = False  # base 3 contributes no measurement this scan
     mu = gf.filter.update(xl, Pl, cl, fix, np.zeros(1, bool), np.arange(B)[None], active, E,
