@@ -240,9 +240,9 @@ class GlobalFusion:
                 row[new, E.base[used[:, k]]] = used[:, k]
             self._extend(new, (c, xm, Pm), E, reported, free, row)
         old = np.setdiff1d(tab.active_indices(), new)
-        amb = ambiguous_members(c, xm, Pm, x, P, row, old, E, self.tx, self.rx, self.az_gate,
-                                self.gamma_max)
-        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row, amb)
+        withheld = ambiguous_members(c, xm, Pm, x, P, row, old, E, self.tx, self.rx,
+                                     self.az_gate, self.gamma_max)
+        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row, withheld)
         return self._manage(t, E, row)
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -342,20 +342,21 @@ class GlobalFusion:
 
     def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
                 P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
-                row: np.ndarray, amb: np.ndarray) -> None:
+                row: np.ndarray, withheld: np.ndarray) -> None:
         """Localisation (64) per altitude band, crossing test (004) on the combined
         prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
         MixtureFilter.predict), new weights, pruning and merging at t (global_filter);
-        status of the tracks."""
+        status of the tracks; `withheld` (cap, B): ambiguous memberships, not used."""
         tab = self.table
         r = row[live]
-        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None] & ~amb[live]
+        active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None] & ~withheld[live]
         n_act = active.sum(1)
         multi, single = n_act >= 2, n_act == 1
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
         fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
         active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
         tab.has[live] &= ~fix.dropped
+        row[live] = r = np.where(fix.dropped, -1, r)
         located = fix.located
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
