@@ -202,13 +202,16 @@ def resolve(i: np.ndarray, m: np.ndarray, gam: np.ndarray) -> tuple[np.ndarray, 
 
 def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarray,
                       P: np.ndarray, row: np.ndarray, tracks: np.ndarray, E: ETrackSet,
-                      tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma_max: float
-                      ) -> np.ndarray:
+                      tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma_max: float,
+                      swap_gate: float) -> np.ndarray:
     """Mask (cap, B) of the memberships of `tracks` that are ambiguous this scan: at base
-    b, track i holds elementary track m, track j holds m', and m' passes [48] against i
-    while m passes it against j (mixtures w, xc, Pc and their moments x, P over all
-    slots; row (cap, B) the rows of E held, -1 = none). Their equivalent measurements
-    are not used this scan (the memberships stay).
+    b, track i holds elementary track m, track j holds m', m' passes [48] against i
+    while m passes it against j, and the swapped pairing is not less likely than the
+    held one by swap_gate or more: gamma(i, m') + gamma(j, m) - gamma(i, m) -
+    gamma(j, m') < swap_gate (the log-likelihood ratio of the two pairings, times 2;
+    GlobalFusion uses the chi-square(1) quantile of gate_prob). Mixtures w, xc, Pc and
+    their moments x, P over all slots; row (cap, B) the rows of E held, -1 = none.
+    Their equivalent measurements are not used this scan (the memberships stay).
     Complement of 001 module 63 (stated): the resolution loop decides each free
     elementary track once, but two aircraft close in one base's measurement space keep
     passing [48] against each other's track, and a young track (velocity and altitude
@@ -219,6 +222,8 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
     other three bases barely observe altitude) and the tracks flip-flopped between the
     two truths for 25 s. As 004 does for a crossing, an ambiguous measurement is not
     used (dense1000: NEES 6.0 -> 3.4, number switches 7.1 -> 4.7 per 100 targets).
+    Without the likelihood condition every crossing of two settled tracks of
+    crossing.toml was withheld too (RMSE/PCRLB 0.79 -> 0.87 over seeds 1-3).
     Candidates: held elementary tracks whose ranges differ by less than sqrt(gamma_max)
     (2 sigma_i + sigma_m + 2 sigma_j + sigma_m'), sigma_i the range sigma of track i's
     projected moments, and azimuths by less than 2 az_gate (the prefilter of
@@ -238,8 +243,12 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
         i, j = i[near], j[near]
         a, o = held[np.r_[i, j]], m[np.r_[j, i]]  # track a against the other's et o
         n = a.size
-        ok = component_gate(w[a], xc[a], Pc[a], E.y[o], E.R[o], np.broadcast_to(tx[b], (n, 3)),
-                            np.broadcast_to(rx[b], (n, 3)), gamma_max)  # [48], both ways
-        mutual = ok[:i.size] & ok[i.size:]
+        tb, rb = np.broadcast_to(tx[b], (n, 3)), np.broadcast_to(rx[b], (n, 3))
+        swap = component_gamma(w[a], xc[a], Pc[a], E.y[o], E.R[o], tb, rb)  # [48], both ways
+        own = m[np.r_[i, j]]
+        kept = component_gamma(w[a], xc[a], Pc[a], E.y[own], E.R[own], tb, rb)
+        k = i.size
+        mutual = ((swap[:k] <= gamma_max) & (swap[k:] <= gamma_max)
+                  & (swap[:k] + swap[k:] - kept[:k] - kept[k:] < swap_gate))
         amb[held[i[mutual]], b] = amb[held[j[mutual]], b] = True
     return amb

@@ -187,6 +187,7 @@ class GlobalFusion:
                                           "mu": ((K,), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
+        self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # global_assoc.ambiguous_members
         self.az_gate = np.radians(self.p.az_gate_deg)
         self.pending: dict[float, dict[int, ElementaryTracks]] = {}
         self.t_last: float | None = None
@@ -241,7 +242,7 @@ class GlobalFusion:
             self._extend(new, (c, xm, Pm), E, reported, free, row)
         old = np.setdiff1d(tab.active_indices(), new)
         withheld = ambiguous_members(c, xm, Pm, x, P, row, old, E, self.tx, self.rx,
-                                     self.az_gate, self.gamma_max)
+                                     self.az_gate, self.gamma_max, self.swap_gate)
         self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row, withheld)
         return self._manage(t, E, row)
 
