@@ -265,7 +265,17 @@ above):
   90 scans) and NEES 3.032 -> 3.023. The built-in scenes (benchmarks/global_consistency.py,
   two_targets and crossing, 16 runs each): identical output. What is left on seed 2 (7.1 per
   scan, 0.8 %): class (a), the altitude of one receiver's geometry held at a wrong value
-  with a sigma_z too small, 4.6 per scan, of which 0.6 honest.
+  with a sigma_z too small, 4.6 per scan, of which 0.6 honest. Traced from birth: track
+  10 started at t = 2 on b1's track of aircraft 38 and b2-b4's of 674, located at t = 3
+  6.3 km too high with sigma_z 93 m; 38's track left at t = 11, the other three kept
+  passing [48] at that altitude (dz 5.7 km, sigma_z 45-160 m, to t = 101). Track 141:
+  b2's track of aircraft 11 with b1, b3, b4's of 827, z 5.7 km too high at sigma_z 176 m
+  from t = 4, 11's track held until t = 51. Track 306: aircraft 285's b1, b2, b4 tracks
+  and 940's b3 track, z right (-0.2 km, sigma_z 0.76 km) until 940's track left at t = 7,
+  then 4.3 km too high at sigma_z 0.3-0.6 km to the end, every member at 1-7 of [48]. The
+  altitude information of a band comes from another target's elementary track and is
+  kept after that track is dissociated; the remaining bases' [48] cannot refute it
+  (global_merge's module doc: a 3 km altitude error costs 3-8 of [48]). Not fixed here.
 """
 
 from __future__ import annotations
