@@ -48,10 +48,9 @@ Cycle at t (001 figure 7):
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
-    whose contributors were reported but gave no measurement this scan (all ambiguous
-    or missed, e.g. crossing.toml t = 52, 59) is predicted only but keeps its status:
-    001 puts a track in pure prediction only when it has no contributor (there the
-    contributors' estimates would still update it).
+    whose contributors were reported but gave no measurement (e.g. crossing.toml t = 52,
+    59) is predicted only but keeps its status, unless none was updated at its base for
+    `coast_cycles` cycles (common.radar.global_status).
     Duplicates (two tracks on disjoint bases, one target) are merged:
     common.radar.global_merge.
 Decorrelation (equivalent measurements), module 64 per band and the mixture state:
@@ -94,7 +93,8 @@ from common.radar.global_filter import MixtureFilter
 from common.radar.global_merge import merge_tracks
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_report import GlobalTracks, etrack_set
-from common.core.track_table import Status, TrackTable
+from common.radar.global_status import quiet_cycles, reported_status
+from common.core.track_table import TrackTable
 
 PLAN = [0, 2]  # (x, y) in the state [x vx y vy z vz]: the plane of the crossing test
 
@@ -120,6 +120,8 @@ class FusionParams(InitParams):
         at least this many contributing updated elementary tracks, located together
         (module 64's test passed: a track of two targets' elementary tracks fails it).
     max_coast: deletion after this many cycles without contributors (module 61).
+    coast_cycles: a confirmed track none of whose contributors was updated for this
+        many cycles is reported coasting (common.radar.global_status).
     max_wait: seconds of wall time without a message after which the service declares
         a base stale (module doc; used by services/global_fusion, not by the core).
     max_lead: seconds of message time after the latest cycle beyond which the service
@@ -149,6 +151,7 @@ class FusionParams(InitParams):
     confirm_cycles: int = 3
     confirm_bases: int = 2
     max_coast: int = 5
+    coast_cycles: int = 2
     max_wait: float = 3.0
     max_lead: float = 600.0
     init_confirmed_only: bool = True
@@ -180,8 +183,8 @@ class GlobalFusion:
         self.filter = MixtureFilter(self.p, self.tx, self.rx)
         K = self.filter.A * self.filter.M  # components: altitude bands x motion models
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
-                                          "n_good": ((), np.int64), "born": ((), float),
-                                          "confirmed": ((), bool),
+                                          "n_good": ((), np.int64), "n_quiet": ((), np.int64),
+                                          "born": ((), float), "confirmed": ((), bool),
                                           "ambiguous": ((), bool),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
                                           "mu": ((K,), float)})
@@ -372,10 +375,9 @@ class GlobalFusion:
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
         tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
         tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
-        reporting = (r >= 0).any(axis=1)  # a contributing elementary track was reported
-        tab.status[live] = np.where(~reporting & ~np.isin(live, new), Status.COASTING,
-                                    np.where(tab.confirmed[live], Status.CONFIRMED,
-                                             Status.TENTATIVE))
+        tab.n_quiet[live] = quiet_cycles(tab.n_quiet[live], np.append(E.updated, False)[r].any(1))
+        tab.status[live] = reported_status(tab.confirmed[live], (r >= 0).any(1), np.isin(live, new),
+                                           tab.n_quiet[live], self.p.coast_cycles)  # module 61
 
     def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> GlobalTracks:
         """Module 61: scores, deletion, recycling; the global tracks of the cycle."""

@@ -79,8 +79,10 @@ class _Synth:
                                                  RadarCrossingParams(enabled=False))
                     for b in BASES for i in range(2)}
 
-    def messages(self, t: float, drop: set[int] = frozenset()) -> list[dict]:
-        """One message per base at t; targets in `drop` are left out of the reports."""
+    def messages(self, t: float, drop: set[int] = frozenset(),
+                 gone: set[int] = frozenset()) -> list[dict]:
+        """One message per base at t; targets in `drop` are left out of the reports,
+        those in `gone` give no plot (their elementary tracks coast)."""
         s = _truth(t)
         out = []
         for b in BASES:
@@ -88,7 +90,8 @@ class _Synth:
             y[:, 2] %= 2 * np.pi
             tracks = []
             for i in range(2):
-                plot = Plots(*(np.array([v]) for v in (*y[i], *SIG)), np.array([3]))
+                plot = Plots(*(np.array([v])[:int(i not in gone)] for v in (*y[i], *SIG)),
+                             np.array([3])[:int(i not in gone)])
                 r = self.trk[(b.id, i)].step(t, plot)
                 if i in drop:
                     continue
@@ -155,6 +158,27 @@ def test_pure_prediction_deletion_and_recycling() -> None:
     for k in range(14, 18):  # the target comes back: a new track takes the freed number
         out = [o for m in syn.messages(float(k)) for o in push(gf, m)][0]
     assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
+
+
+def test_track_of_a_departed_target_is_reported_coasting() -> None:
+    """Target 0 leaves: every base still reports its elementary track, in pure
+    prediction. The global track stays confirmed one cycle and is reported coasting
+    from the second (coast_cycles = 2, common.radar.global_status); the other target's
+    track stays confirmed."""
+    syn = _Synth(np.random.default_rng(8))
+    gf = GlobalFusion(BASES, FusionParams())
+    for k in range(8):
+        out = [o for m in syn.messages(float(k)) for o in push(gf, m)][0]
+    assert [tr["status"] for tr in out["tracks"]] == ["confirmed", "confirmed"]
+    status = []
+    for k in range(8, 11):
+        out = [o for m in syn.messages(float(k), gone={0}) for o in push(gf, m)][0]
+        status.append({len(tr["etracks"]) and tr["etracks"][0][1]: tr["status"]
+                       for tr in out["tracks"]})
+    assert [s[1] for s in status] == ["confirmed", "coasting", "coasting"]
+    assert [s[2] for s in status] == ["confirmed"] * 3
+    out = [o for m in syn.messages(11.0) for o in push(gf, m)][0]  # back: confirmed again
+    assert [tr["status"] for tr in out["tracks"]] == ["confirmed", "confirmed"]
 
 
 def test_cycle_waits_for_every_base_unless_stale() -> None:
