@@ -73,17 +73,7 @@ class BearingCrossing:
         its first gain near one; with a missed detection of its own target (P_D < 1)
         GNN hands it the other target's detection (or a clutter detection nearer the
         other track), which moves it onto the other target in one update. Seen on
-        sonar_cross_1dpm_uneq (both tracks on the weak target, the strong one lost).
-        The detection taken from the leaving track belongs, by the same rule, to the
-        confirmed track whose prediction is nearest to it; if GNN gave that track a
-        detection farther from its prediction (GNN maximises the number of pairs, so it
-        did that to let the leaving track have this one), that pair is dropped too and
-        the track coasts this scan (a miss), rather than taking the nearer detection: the
-        nearest-prediction rule errs when both coasted predictions are off (own-ship
-        turn), and an error would then move the track onto the other target. Seen on
-        sonar_hold_cross_eq seed 12: a clutter detection 3.5 deg off, at a scan where the
-        other target was not detected, deflected the track that kept its bearing rate
-        through the memory mode, and it re-entered the ambiguity with the wrong rate."""
+        sonar_cross_1dpm_uneq (both tracks on the weak target, the strong one lost)."""
         keep = np.ones(rows.size, dtype=bool)
         if rows.size == 0:
             return keep
@@ -96,13 +86,7 @@ class BearingCrossing:
         k = np.flatnonzero(leaving)
         diff = wrapped_diff(z[cols[k]][:, None, dims], zp[None, :, :], [0])
         dist = np.sum(diff**2 / Rd[cols[k]][:, None, dims], axis=2)  # (k, confirmed)
-        near = np.argmin(dist, axis=1)
-        keep[k] = pos[near] == rows[k]
-        for i in np.flatnonzero(~keep[k]):  # the pair GNN gave the nearest track instead
-            own = np.flatnonzero(rows == pos[near[i]])
-            if own.size:
-                d = wrapped_diff(z[cols[own[0]], dims], zp[near[i]], [0])
-                keep[own[0]] &= np.sum(d**2 / Rd[cols[own[0]], dims]) <= dist[i, near[i]]
+        keep[k] = pos[np.argmin(dist, axis=1)] == rows[k]
         return keep
 
     def forget(self, ids: np.ndarray) -> None:
