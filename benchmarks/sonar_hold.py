@@ -74,7 +74,9 @@ change of the failing seeds. Tried there and not kept: the exit rule also droppi
 pair GNN gave the track nearest to the vetoed detection (seeds 1-40: cross_eq 1 -> 0, no
 scene worse; seeds 1-160: 38 -> 43 swap runs on the ten crossing scenes), the level held
 in the memory mode, the memory mode entered from 004's straight line (eq. 1, 8) fitted to
-the track's register, 004's progressive mode. The MHT breaks on
+the track's register, 004's progressive mode, a hysteresis on the eq. 13 test (seeds
+1-160: 38 -> 30 with epsilon / 3 to leave, but sonar_cross_2dpm_uneq and 4dpm_eq worse).
+The MHT breaks on
 hold5 (3 runs, seeds 3, 9, 18) were confirmed tracks deleted by the SPRT counter after a
 run of missed detections (seed 9: contact 3 undetected 4 cycles in a row at the North
 crossing, no detection in the simulator's output) and replaced by a new number: the
