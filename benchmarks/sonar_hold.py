@@ -66,7 +66,17 @@ the bearing only) gave 2 swap runs on cross_eq and was not kept either; nor was 
 may leave a confirmed track unassigned (pair cost d^2 - G, a miss 0: the most likely
 assignment by 000's dL instead of the most pairs), which stops a track taking the other
 target's detection when its own is missed (cross_slow seed 26) but at 40 seeds gave the
-same 3 swap runs in all (cross_eq 1, cross_turn 0, cross_slow 2). The MHT breaks on
+same 3 swap runs in all (cross_eq 1, cross_turn 0, cross_slow 2). Over seeds 1-160
+(benchmarks/gnn_crossing_seeds.py, 2026-11-26) the GNN swap runs are cross_eq 3, cross_uneq
+1, cross_turn 8, cross_slow 9 (break runs 1, 0, 4, 2; sonar_hold5 0 swap runs, 1 break
+run): seed 12 is one of several, and 20 seeds cannot tell a change of the rates from a
+change of the failing seeds. Tried there and not kept: the exit rule also dropping the
+pair GNN gave the track nearest to the vetoed detection (seeds 1-40: cross_eq 1 -> 0, no
+scene worse; seeds 1-160: 38 -> 43 swap runs on the ten crossing scenes), the level held
+in the memory mode, the memory mode entered from 004's straight line (eq. 1, 8) fitted to
+the track's register, 004's progressive mode, a hysteresis on the eq. 13 test (seeds
+1-160: 38 -> 30 with epsilon / 3 to leave, but sonar_cross_2dpm_uneq and 4dpm_eq worse).
+The MHT breaks on
 hold5 (3 runs, seeds 3, 9, 18) were confirmed tracks deleted by the SPRT counter after a
 run of missed detections (seed 9: contact 3 undetected 4 cycles in a row at the North
 crossing, no detection in the simulator's output) and replaced by a new number: the

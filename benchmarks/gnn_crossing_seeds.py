@@ -1,0 +1,119 @@
+"""Swap and break runs of the single-hypothesis (GNN) bearing tracker with seed 004 crossing
+management on the crossing scenes, over many seeds, with the seeds that fail (issue 13).
+
+Run: .venv/bin/python benchmarks/gnn_crossing_seeds.py [--runs 160] [--first 1] [--case NAME ...]
+     [--workers 2]
+
+Each (scene, seed) is scored by the benchmark that owns the scene, in GNN mode, and the
+runs are spread over worker processes: the four sonar_hold_cross_* scenes and
+sonar_hold5 by benchmarks/sonar_hold.py (`run_once`: swaps, breaks, false tracks, RMSE),
+the sonar_cross_* scenes by benchmarks/mht.py (`run_one`, 3 false detections per cycle).
+Its purpose: the 20-seed tables of those two benchmarks cannot tell a swap rate of 0 from
+one of a few per cent (P(0 of 20) = 0.54 at 3 %), so a change is checked here on seeds
+it was not looked at on.
+
+Measured 2026-11-26 at 62f13e8 (the tracker of this branch), seeds 1-160, swap runs (break
+runs) and the failing seeds:
+  sonar_hold_cross_eq     3 (1)  12, 90, 135
+  sonar_hold_cross_uneq   1 (0)  127
+  sonar_hold_cross_turn   8 (4)  36, 67, 90, 93, 96, 112, 125, 135
+  sonar_hold_cross_slow   9 (2)  26, 55, 59, 66, 79, 122, 138, 142, 150
+  sonar_cross_1dpm_eq     1 (0)  77
+  sonar_cross_1dpm_uneq   1 (1)  77
+  sonar_cross_2dpm_eq     2 (0)  73, 126
+  sonar_cross_2dpm_uneq   4 (0)  14, 73, 120, 126
+  sonar_cross_4dpm_eq     3 (0)  101, 152, 160
+  sonar_cross_4dpm_uneq   6 (0)  2, 101, 124, 142, 153, 160
+  sonar_hold5             0 (1)
+38 swap runs in 1600 crossing runs (2.4 %); seeds 1-20 hold 3 of them (cross_eq 12,
+2dpm_uneq 14, 4dpm_uneq 2). With these rates, 0 swap runs on all ten scenes in one set
+of 20 seeds has a probability of about exp(-20 x 38 / 160) = 1 %: a change that reaches
+it without lowering the rates several times over is a change of seeds, not of rates.
+Changes tried against that table (none kept; swap runs over seeds 1-160 unless stated):
+  - exit rule also drops the pair GNN gave the track whose prediction is nearest to the
+    vetoed detection, when its own detection is farther (the track coasts the scan):
+    seeds 1-40 5 -> 3 (cross_eq 12 and 2dpm_uneq 14 fixed, none new), seeds 1-160 38 -> 43
+    (cross_eq 3 -> 2, 2dpm_uneq 4 -> 3, but cross_turn 8 -> 11, cross_slow 9 -> 11,
+    cross_uneq 1 -> 2, 4dpm_eq 3 -> 4);
+  - the same rule kept for the leaving track until its first update: seeds 1-40 5 -> 13
+    (and 4 break runs on cross_turn);
+  - level held in 004's memory mode (amplitude-rate coupling of F off): 38 -> 35, but
+    seeds 1-20 worse (cross_eq 1 -> 2, seed 10; cross_slow 0 -> 1, seed 3);
+  - memory mode entered from 004's straight line (eq. 1, 8: weighted least squares over
+    the track's register, longest recent span passing a residual chi-square test)
+    instead of the Kalman state: seeds 1-40 5 -> 5 (other seeds; cross_uneq RMSE 0.50 ->
+    0.60 deg). At the 2000 memory entries of seeds 1-40 its bearing-rate error was not
+    smaller than the Kalman filter's (cross_uneq RMS 0.0127 against 0.0085 deg/s: the
+    bearing rate of a near contact is not constant over minutes) and its covariance
+    inconsistent (mean NEES 9-990 per scene for 2 dof; the Kalman filter's 0.2-2.4, 5
+    and 9 on the 4 deg/min crossings); with a parabola (004 eq. 14), seeds 1-40: 4 swap
+    runs and a new break run (sonar_hold5);
+  - 004's progressive mode (eq. 12) instead of memory: 1078 swap runs (the tracks merge);
+  - hysteresis on the eq. 13 test: a flagged track stays flagged until the sum falls below
+    epsilon / h r (5 of the 6 cross_slow failures looked at leave the memory mode, take
+    a detection and re-enter it 1-2 scans later): h = 10: 38 -> 32 (cross_eq 3 -> 0, cross_slow 9 -> 2,
+    but cross_turn 8 -> 12, cross_uneq 1 -> 4, 4dpm_eq 3 -> 5; cross_eq break runs
+    1 -> 3); h = 3: 38 -> 30 (cross_eq 3 -> 0, cross_turn 8 -> 5, cross_slow 9 -> 6, but
+    2dpm_uneq 4 -> 6, 4dpm_eq 3 -> 5; 2dpm_uneq 14 and 4dpm_uneq 2 still fail). Neither
+    is a clear gain at these counts, and h is a parameter 004 does not have.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from multiprocessing import Pool
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from benchmarks import mht as MH  # noqa: E402
+from benchmarks import sonar_hold as SH  # noqa: E402
+
+CASES = [c for c in SH.CASES if c.startswith("sonar_hold_cross")] + MH.CROSSING + ["sonar_hold5"]
+
+
+def run(job: tuple[str, int]) -> tuple[str, int, dict[str, float]]:
+    """One (scene, seed) in GNN mode: false tracks, cycles, breaks, swaps, squared bearing
+    errors (rad^2) and their count."""
+    case, seed = job
+    if case in SH.CASES:
+        r = SH.run_once(REPO / "scenarios" / f"{case}.toml", seed, "gnn")
+        return case, seed, {"false": r.false_tracks, "cycles": r.cycles, "breaks": r.breaks,
+                            "swaps": r.swaps, "se": r.sq_err, "n": r.n_err}
+    sc = MH.Score()
+    MH.run_one(MH.case_doc(case), "gnn", seed, sc)
+    return case, seed, {"false": sc.false, "cycles": sc.cycles, "breaks": sc.breaks,
+                        "swaps": sc.swaps, "se": math.radians(1.0) ** 2 * sc.se, "n": sc.n_se}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=160)
+    ap.add_argument("--first", type=int, default=1, help="first seed")
+    ap.add_argument("--case", nargs="*", default=CASES, choices=CASES)
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args()
+    jobs = [(c, s) for c in a.case for s in range(a.first, a.first + a.runs)]
+    with Pool(a.workers) as pool:
+        results = pool.map(run, jobs, chunksize=1)
+    print(f"seeds {a.first}-{a.first + a.runs - 1}, GNN mode")
+    print(f"{'scene':<24}{'false/100':>10}{'RMSE deg':>9}  swap runs (seeds); break runs (seeds)")
+    total = 0
+    for case in a.case:
+        rows = [(s, r) for c, s, r in results if c == case]
+        false_rate = 100.0 * sum(r["false"] for _, r in rows) / sum(r["cycles"] for _, r in rows)
+        rmse = math.degrees(math.sqrt(sum(r["se"] for _, r in rows) / max(1, sum(r["n"] for _, r in rows))))
+        swaps = [s for s, r in rows if r["swaps"]]
+        breaks = [s for s, r in rows if r["breaks"]]
+        total += len(swaps) if case != "sonar_hold5" else 0
+        print(f"{case:<24}{false_rate:>10.2f}{rmse:>9.2f}  {len(swaps)} {swaps}; {len(breaks)} {breaks}",
+              flush=True)
+    print(f"swap runs on the crossing scenes: {total}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
