@@ -2,7 +2,7 @@
 management on the crossing scenes, over many seeds, with the seeds that fail (issue 13).
 
 Run: .venv/bin/python benchmarks/gnn_crossing_seeds.py [--runs 160] [--first 1] [--case NAME ...]
-     [--workers 2]
+     [--workers 2] [--mode gnn|mht]  (mht: the multiple-hypothesis mode, for comparison)
 
 Each (scene, seed) is scored by the benchmark that owns the scene, in GNN mode, and the
 runs are spread over worker processes: the four sonar_hold_cross_* scenes and
@@ -75,16 +75,16 @@ from benchmarks import sonar_hold as SH  # noqa: E402
 CASES = [c for c in SH.CASES if c.startswith("sonar_hold_cross")] + MH.CROSSING + ["sonar_hold5"]
 
 
-def run(job: tuple[str, int]) -> tuple[str, int, dict[str, float]]:
-    """One (scene, seed) in GNN mode: false tracks, cycles, breaks, swaps, squared bearing
-    errors (rad^2) and their count."""
-    case, seed = job
+def run(job: tuple[str, int, str]) -> tuple[str, int, dict[str, float]]:
+    """One (scene, seed) in one mode (gnn, mht): false tracks, cycles, breaks, swaps,
+    squared bearing errors (rad^2) and their count."""
+    case, seed, mode = job
     if case in SH.CASES:
-        r = SH.run_once(REPO / "scenarios" / f"{case}.toml", seed, "gnn")
+        r = SH.run_once(REPO / "scenarios" / f"{case}.toml", seed, mode)
         return case, seed, {"false": r.false_tracks, "cycles": r.cycles, "breaks": r.breaks,
                             "swaps": r.swaps, "se": r.sq_err, "n": r.n_err}
     sc = MH.Score()
-    MH.run_one(MH.case_doc(case), "gnn", seed, sc)
+    MH.run_one(MH.case_doc(case), mode, seed, sc)
     return case, seed, {"false": sc.false, "cycles": sc.cycles, "breaks": sc.breaks,
                         "swaps": sc.swaps, "se": math.radians(1.0) ** 2 * sc.se, "n": sc.n_se}
 
@@ -95,11 +95,12 @@ def main() -> int:
     ap.add_argument("--first", type=int, default=1, help="first seed")
     ap.add_argument("--case", nargs="*", default=CASES, choices=CASES)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--mode", choices=["gnn", "mht"], default="gnn")
     a = ap.parse_args()
-    jobs = [(c, s) for c in a.case for s in range(a.first, a.first + a.runs)]
+    jobs = [(c, s, a.mode) for c in a.case for s in range(a.first, a.first + a.runs)]
     with Pool(a.workers) as pool:
         results = pool.map(run, jobs, chunksize=1)
-    print(f"seeds {a.first}-{a.first + a.runs - 1}, GNN mode")
+    print(f"seeds {a.first}-{a.first + a.runs - 1}, {a.mode.upper()} mode")
     print(f"{'scene':<24}{'false/100':>10}{'RMSE deg':>9}  swap runs (seeds); break runs (seeds)")
     total = 0
     for case in a.case:

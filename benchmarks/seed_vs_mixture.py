@@ -27,6 +27,21 @@ dense300, whole scenarios; 2 shared cores at load 3-6, so the costs are +-20 %):
   dense300     mixture      1     300      0.5     0.8    1.00    3.00       0.92    3.77     108.4
   dense300     seed         1     300      7.0    10.7   26.00   20.67       1.10   27.29     104.3
 
+Measured again 2026-11-26 after issue 14's association work (ambiguous memberships, the
+v_b leave-one-out test, confirmation on located scans, coasting report: both paths;
+same seeds):
+
+  scene        filter   seeds targets   missed   false  switch  breaks RMSE/PCRLB    NEES    fusion
+  two_targets  mixture      3       2      0.0     0.0    0.00    0.00       0.78    1.78       3.6
+  two_targets  seed         3       2     16.9     5.7   16.67   33.33       1.19    5.47       3.6
+  crossing     mixture      3       2      0.0     0.0    0.00    0.00       0.79    2.09       4.0
+  crossing     seed         3       2     13.5    13.5    0.00   50.00       1.35   42.25       3.4
+  dense        mixture      1     120      0.5     0.2    0.00    5.00       0.92    3.08      13.8
+  dense        seed         1     120     11.3     5.4   13.33   40.83       1.13   17.33      15.7
+  dense300     mixture      1     300      0.5     0.2    0.67    3.00       0.92    3.21      30.1
+  dense300     seed         1     300      7.0     2.8   16.67   31.00       1.05   16.15      27.5
+
+The seed path is still worse in every quality column; the costs are of a faster machine.
 The mixture rows of dense and dense300 are those of benchmarks/dense_scale.py (same
 chain, same seed). What the seed path does (tests/radar/test_global_seed.py, and
 per-scan track listings of two_targets.toml seeds 1-4): a straight, high target is held
