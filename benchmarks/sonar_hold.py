@@ -67,7 +67,7 @@ may leave a confirmed track unassigned (pair cost d^2 - G, a miss 0: the most li
 assignment by 000's dL instead of the most pairs), which stops a track taking the other
 target's detection when its own is missed (cross_slow seed 26) but at 40 seeds gave the
 same 3 swap runs in all (cross_eq 1, cross_turn 0, cross_slow 2). Over seeds 1-160
-(benchmarks/gnn_crossing_seeds.py, 2026-11-26) the GNN swap runs are cross_eq 3, cross_uneq
+(benchmarks/crossing_seeds.py, 2026-11-26) the GNN swap runs are cross_eq 3, cross_uneq
 1, cross_turn 8, cross_slow 9 (break runs 1, 0, 4, 2; sonar_hold5 0 swap runs, 1 break
 run): seed 12 is one of several, and 20 seeds cannot tell a change of the rates from a
 change of the failing seeds. Tried there and not kept: the exit rule also dropping the
