@@ -29,7 +29,7 @@ elementary crossing, or module 62 extending a new track with the neighbour's tra
 that base while the altitude is still open), the gate [48] of that track alone passes
 (the manoeuvre component covers the jump) and the EKF explains it by a false z and vz
 with a small covariance: on dense1000.toml, 1.3 % of the scored samples, a third of the
-sum of the position NEES (mean 6.0; dense_scale.py's docstring). The other bases' v_b
+sum of the position NEES (mean 6.0; docs/radar_at_scale.md). The other bases' v_b
 do check it: the row j of a contributor whose squared innovation against the
 prediction updated with every other row of [49] exceeds the chi-square(1) threshold of
 the largest of n rows at gate_prob is left out of modules 64-65 for the scan, the track
