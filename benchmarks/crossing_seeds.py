@@ -62,6 +62,25 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     1 -> 3); h = 3: 38 -> 30 (cross_eq 3 -> 0, cross_turn 8 -> 5, cross_slow 9 -> 6, but
     2dpm_uneq 4 -> 6, 4dpm_eq 3 -> 5; 2dpm_uneq 14 and 4dpm_uneq 2 still fail). Neither
     is a clear gain at these counts, and h is a parameter 004 does not have.
+  - quick re-entry restore (a complement of 004 claim 5: an exit the eq. 13 test revokes at
+    once was ambiguous too): when the test flags a confirmed track again before it has taken
+    more than `quick` detections since it left the memory mode, the track gets back its last
+    memory-mode state (IMM models and probabilities), carried forward by the memory-mode
+    prediction only (quiet Q), so the updates between are undone; quick = 2 from the two
+    parameters per component of 004's line C + A dt (eq. 13), and quick = 1. Baseline run
+    again with the rule off (aca93d0): the table above, seeds and break runs alike.
+    quick = 2: 38 -> 42 (cross_eq 3 -> 2, cross_turn 8 -> 4, but cross_slow 9 -> 12, 1dpm_eq
+    1 -> 3, 1dpm_uneq 1 -> 3, 4dpm_eq 3 -> 4, 4dpm_uneq 6 -> 7; break runs cross_eq 1 -> 2,
+    cross_uneq 0 -> 3, cross_slow 2 -> 7, hold5 1 -> 2, cross_turn 4 -> 2; RMSE cross_uneq
+    0.52 -> 0.59, cross_slow 0.64 -> 0.71 deg). quick = 1: 38 -> 39 (cross_eq 3 -> 2,
+    cross_turn 8 -> 4, cross_slow 9 -> 9 on other seeds, but cross_uneq 1 -> 3, 1dpm_uneq
+    1 -> 3, 2dpm_eq 2 -> 4; break runs cross_eq 1 -> 2, cross_uneq 0 -> 3, cross_slow
+    2 -> 7, hold5 1 -> 2, cross_turn 4 -> 1; RMSE cross_uneq 0.52 -> 0.57, cross_slow
+    0.64 -> 0.71 deg). With quick = 1 the rule fired 72 times in 10 cross_slow runs (24 in
+    10 cross_turn runs): on the slow crossing the test flickers, so the restore throws away
+    many detections and the tracks coast longer on the rate they entered with (the likely
+    cause of the extra breaks; not checked run by run). Only cross_turn gains (8 -> 4 with
+    either value).
 """
 
 from __future__ import annotations
