@@ -23,7 +23,8 @@ import numpy as np
 import zenoh
 
 from common.wire import protocol
-from common.bus.transport import LOG_EVERY, Inbox, LossCount, Publisher, linger, open_session
+from common.bus.transport import (LOG_EVERY, Inbox, LossCount, Publisher, SignalBytes, linger,
+                                  open_session)
 from common.core.rejection import Rejected
 from common.deploy.config import Config
 
@@ -94,6 +95,7 @@ class Service:
         """Drain the inbox until SIGINT/SIGTERM; returns the process exit code."""
         signal.signal(signal.SIGINT, self.stop)
         signal.signal(signal.SIGTERM, self.stop)
+        signals = SignalBytes()  # in case a Python handler stays unrun (SignalBytes)
         token = self.session.liveliness().declare_token(
             f"{self.root}/alive/{self.name}/{self.instance}"
         )
@@ -104,10 +106,13 @@ class Service:
                 env = self.inbox.get(timeout=0.1)
                 if env is not None:
                     self._dispatch(env)
+                if signals.received():
+                    self._stop.set()
                 if time.monotonic() >= next_metrics:
                     self.publish(f"metrics/{self.name}/{self.instance}", self.metrics())
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
         finally:
+            signals.close()
             token.undeclare()
             self.close()
         self.log.info("stopped: %s", dict(self.counters))

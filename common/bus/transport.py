@@ -135,6 +135,34 @@ def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
             f"'pfusion router --listen {zc.connect[0]}', or pass --connect ENDPOINT") from None
 
 
+class SignalBytes:
+    """SIGINT and SIGTERM as bytes on a socket (signal.set_wakeup_fd, main thread only),
+    read by a loop beside its Python handlers. The C handler writes the byte whatever
+    happens next, while the Python handler can stay unrun: once, on a loaded machine, a
+    channel plotter ignored SIGINT and then SIGTERM for 5 s each, its loop polling the
+    inbox all along (tests/integration/test_shutdown.py; likely CPython 3.11's eval
+    breaker, recomputed by another Python thread, here Zenoh's callback thread)."""
+
+    def __init__(self) -> None:
+        self._r, self._w = socket.socketpair()
+        self._r.setblocking(False)
+        self._w.setblocking(False)
+        signal.set_wakeup_fd(self._w.fileno(), warn_on_full_buffer=False)
+
+    def received(self) -> bool:
+        """True once SIGINT or SIGTERM arrived since the last call."""
+        try:
+            data = self._r.recv(256)
+        except BlockingIOError:
+            return False
+        return signal.SIGINT in data or signal.SIGTERM in data
+
+    def close(self) -> None:
+        signal.set_wakeup_fd(-1)
+        self._r.close()
+        self._w.close()
+
+
 def stop_on_signals() -> threading.Event:
     """An event set by SIGINT or SIGTERM: the clean-exit flag of a tool's main loop."""
     stop = threading.Event()

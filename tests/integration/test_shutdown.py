@@ -3,6 +3,7 @@ service's liveliness token disappears with it."""
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import time
@@ -10,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from common.bus.transport import SignalBytes
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 RADAR = str(SCENARIOS / "two_targets.toml")
@@ -57,3 +59,21 @@ def test_sigusr1_writes_every_threads_stack_to_the_log_and_the_service_runs_on(t
         log = (tmp_path / "elementary-tracker.log").read_text()
         assert "Current thread" in log and "common/bus/service.py" in log, log
         assert child.alive() and child.stop() == 0
+
+
+def test_signal_bytes_see_a_shutdown_signal_whatever_its_python_handler_does() -> None:
+    """The service loop's fallback (common.bus.transport.SignalBytes): SIGTERM is seen
+    even when the Python handler does nothing; another signal is not a shutdown."""
+    old = {s: signal.signal(s, lambda *_: None) for s in (signal.SIGTERM, signal.SIGUSR2)}
+    signals = SignalBytes()
+    try:
+        assert not signals.received()
+        os.kill(os.getpid(), signal.SIGUSR2)
+        assert not signals.received()
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert signals.received()
+        assert not signals.received()
+    finally:
+        signals.close()
+        for s, h in old.items():
+            signal.signal(s, h)
