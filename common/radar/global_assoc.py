@@ -241,14 +241,19 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
         i, j = overlap_pairs(E.y[m, 0] - half, E.y[m, 0] + half)
         near = np.abs(wrap_pi(E.y[m[i], 2] - E.y[m[j], 2])) <= 2.0 * az_gate
         i, j = i[near], j[near]
-        a, o = held[np.r_[i, j]], m[np.r_[j, i]]  # track a against the other's et o
-        n = a.size
-        tb, rb = np.broadcast_to(tx[b], (n, 3)), np.broadcast_to(rx[b], (n, 3))
-        swap = component_gamma(w[a], xc[a], Pc[a], E.y[o], E.R[o], tb, rb)  # [48], both ways
-        own = m[np.r_[i, j]]
-        kept = component_gamma(w[a], xc[a], Pc[a], E.y[own], E.R[own], tb, rb)
+        swap = _pair_gammas(w, xc, Pc, held[np.r_[i, j]], m[np.r_[j, i]], E, tx[b], rx[b])
         k = i.size
-        mutual = ((swap[:k] <= gamma_max) & (swap[k:] <= gamma_max)
-                  & (swap[:k] + swap[k:] - kept[:k] - kept[k:] < swap_gate))
-        amb[held[i[mutual]], b] = amb[held[j[mutual]], b] = True
+        both = (swap[:k] <= gamma_max) & (swap[k:] <= gamma_max)  # [48] each way
+        i, j, swap = i[both], j[both], swap[:k][both] + swap[k:][both]
+        kept = _pair_gammas(w, xc, Pc, held[np.r_[i, j]], m[np.r_[i, j]], E, tx[b], rx[b])
+        likely = swap - kept[:i.size] - kept[i.size:] < swap_gate
+        amb[held[i[likely]], b] = amb[held[j[likely]], b] = True
     return amb
+
+
+def _pair_gammas(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, a: np.ndarray, o: np.ndarray,
+                 E: ETrackSet, tx: np.ndarray, rx: np.ndarray) -> np.ndarray:
+    """`component_gamma` of tracks a against elementary tracks o (rows of E), one base."""
+    n = a.size
+    return component_gamma(w[a], xc[a], Pc[a], E.y[o], E.R[o], np.broadcast_to(tx, (n, 3)),
+                           np.broadcast_to(rx, (n, 3)))
