@@ -48,6 +48,21 @@ def observation(x: np.ndarray, tx: np.ndarray, rx: np.ndarray) -> tuple[np.ndarr
     return h, H
 
 
+def _innovation(x: np.ndarray, pos: np.ndarray, pos_cov: np.ndarray, vb: np.ndarray,
+                vb_var: np.ndarray, active: np.ndarray, tx: np.ndarray, rx: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Innovation y - h of [49] (N, 3 + B), Jacobian [57] and R of [50]; an inactive v_b
+    row is padded (innovation 0, H row 0, variance 1)."""
+    n, B = vb.shape
+    h, H = observation(x, tx, rx)
+    nu = np.concatenate([pos - h[:, :3], np.where(active, vb - h[:, 3:], 0.0)], axis=1)  # [49]
+    H[:, 3:] *= active[..., None]
+    R = np.zeros((n, 3 + B, 3 + B))
+    R[:, :3, :3] = pos_cov
+    R[:, np.arange(3, 3 + B), np.arange(3, 3 + B)] = np.where(active, vb_var, 1.0)  # [50]
+    return nu, H, R
+
+
 def fused_update(
     x: np.ndarray, P: np.ndarray, pos: np.ndarray, pos_cov: np.ndarray, vb: np.ndarray,
     vb_var: np.ndarray, active: np.ndarray, tx: np.ndarray, rx: np.ndarray,
@@ -58,18 +73,11 @@ def fused_update(
 
     pos (N, 3), pos_cov (N, 3, 3) from module 64; vb, vb_var, active (N, B).
     """
-    n, B = vb.shape
-    h, H = observation(x, tx, rx)
-    z = np.concatenate([pos, np.where(active, vb, 0.0)], axis=1)  # 001 [49]
-    h[:, 3:] = np.where(active, h[:, 3:], 0.0)
-    H[:, 3:] *= active[..., None]
-    R = np.zeros((n, 3 + B, 3 + B))
-    R[:, :3, :3] = pos_cov
-    R[:, np.arange(3, 3 + B), np.arange(3, 3 + B)] = np.where(active, vb_var, 1.0)  # [50]
-    x_new, P_new, loglik = _update(x, P, z - h, H, R, gain_scale)
+    nu, H, R = _innovation(x, pos, pos_cov, vb, vb_var, active, tx, rx)
+    x_new, P_new, loglik = _update(x, P, nu, H, R, gain_scale)
     # a padded row (S = 1, innovation 0) adds log N(0; 0, 1): removed, so that loglik is
     # that of the contributing rows only (3 + nb_cet dimensions)
-    return x_new, P_new, loglik + 0.5 * np.log(2.0 * np.pi) * (B - active.sum(axis=1))
+    return x_new, P_new, loglik + 0.5 * np.log(2.0 * np.pi) * (~active).sum(axis=1)
 
 
 def vb_deletion_residuals(
@@ -80,13 +88,7 @@ def vb_deletion_residuals(
     r_j^2 = (S^-1 nu)_j^2 / (S^-1)_jj (N, B), the squared innovation of row j against
     the prediction updated with all the other rows of [49], in its own sigma (chi-square,
     1 dof, when the rows belong to the track's target); 0 where not active."""
-    n, B = vb.shape
-    h, H = observation(x, tx, rx)
-    nu = np.concatenate([pos - h[:, :3], np.where(active, vb - h[:, 3:], 0.0)], axis=1)
-    H[:, 3:] *= active[..., None]
-    R = np.zeros((n, 3 + B, 3 + B))
-    R[:, :3, :3] = pos_cov
-    R[:, np.arange(3, 3 + B), np.arange(3, 3 + B)] = np.where(active, vb_var, 1.0)  # [50]
+    nu, H, R = _innovation(x, pos, pos_cov, vb, vb_var, active, tx, rx)
     W = np.linalg.inv(H @ P @ np.swapaxes(H, 1, 2) + R)
     u = (W @ nu[..., None])[..., 0]
     return np.where(active, u[:, 3:] ** 2 / np.diagonal(W, axis1=1, axis2=2)[:, 3:], 0.0)

@@ -243,10 +243,10 @@ class GlobalFusion:
             for k in range(used.shape[1]):
                 row[new, E.base[used[:, k]]] = used[:, k]
             self._extend(new, (c, xm, Pm), E, reported, free, row)
-        old = np.setdiff1d(tab.active_indices(), new)
-        withheld = ambiguous_members(c, xm, Pm, x, P, row, old, E, self.tx, self.rx,
-                                     self.az_gate, self.gamma_max, self.swap_gate)
-        self._update(t, tab.active_indices(), new, x, P, (xm, Pm, c), E, row, withheld)
+        now = tab.active_indices()
+        withheld = ambiguous_members(c, xm, Pm, x, P, row, now[~np.isin(now, new)], E, self.tx,
+                                     self.rx, self.az_gate, self.gamma_max, self.swap_gate)
+        self._update(t, now, new, x, P, (xm, Pm, c), E, row, withheld)
         return self._manage(t, E, row)
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
