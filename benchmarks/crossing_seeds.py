@@ -81,6 +81,17 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     many detections and the tracks coast longer on the rate they entered with (the likely
     cause of the extra breaks; not checked run by run). Only cross_turn gains (8 -> 4 with
     either value).
+  - identity check after the exit (2026-11-26, session 11; the likelihood form of 000's
+    re-link at the end of a resolution conflict: each track's state at memory entry,
+    predicted by the quiet model, against the weighted least-squares line and mean level
+    of each track's post-exit detections, both pairings, decided by 000's claim 2 limits
+    T1/T2 after 3-10 detections each; a swap decision exchanges the post-exit states and
+    register rows): 38 -> 39 swap runs (no failing seed fixed, 2dpm_uneq 33 new); on
+    rate and level only (the bearing left out): 41 (2dpm_eq 139, 2dpm_uneq 33 and 139
+    new). Traced: the failures are not wrong pairings at a clean exit: cross_slow 26 is a
+    six-minute ambiguity whose memory-mode level drifts 5 dB before both tracks settle on
+    one target; 2dpm_uneq 33 enters memory at t = 100 with 70 s old tracks whose rates
+    are twice the truth (the extrapolations cross 160 s before the targets do).
 """
 
 from __future__ import annotations
