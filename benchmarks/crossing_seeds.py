@@ -34,7 +34,18 @@ The multiple-hypothesis mode on the same seeds (--mode mht, 2026-11-26, the trac
 c379026), swap runs (break runs): 3 (6) in the 1600 crossing runs (0.19 %), all three on
 sonar_hold_cross_slow (seeds 107, 133, 150); breaks cross_uneq 135, cross_turn 35,
 cross_slow 154, 4dpm_eq 135, 4dpm_uneq 135, hold5 109; false tracks <= 0.02 per 100
-cycles, RMSE 0.38-0.65 deg.
+cycles, RMSE 0.38-0.65 deg. Traced: all three are a pair that coalesced on one target
+mid-crossing (both tracks on one bearing for minutes) and left it in the bounced order,
+two of them (107, 133) by the re-link of the lost target's new track by the sign of its
+young rate estimate (e.g. -1.54 deg/min on a target rising at 0.8). Since 2026-11-26
+(session 11) a coalesced pair is settled by the likelihood of both pairings against the
+two tracks' states from before the conflict (common.sonar.mht_tracks.crossing_order and
+the coalesced branch of relink): 1 (6) swap runs in the 1600 crossing runs (0.06 %,
+cross_slow 150: the re-linked track is pulled into a new conflict by the young track's
+wide gate at once), the same break runs, and sonar_hold5 seed 106 now a swap run (a
+young track with a rate of -17 deg/min re-linked to the wrong track; the order at the
+end of the conflict is then restored at t = 780 s, 35 s after the targets were scored
+resolved).
 Changes tried against that table (none kept; swap runs over seeds 1-160 unless stated):
   - exit rule also drops the pair GNN gave the track whose prediction is nearest to the
     vetoed detection, when its own detection is farther (the track coasts the scan):

@@ -49,8 +49,15 @@ Deviations (stated):
   measurement or are closer than d_merge: both followed one target out of a slow
   crossing), omega, the lost
   target's new track, is far from both, so it is re-linked when within relink_deg of
-  them, by the seed's rate-sign / level rule. A conflict also ends when P_u of the pair's main hypotheses falls
-  below 1e-3 (the seed ends it by the re-link only).
+  them. A conflict also ends when P_u of the pair's main hypotheses falls below 1e-3 (the
+  seed ends it by the re-link only).
+- A coalesced pair (its main hypotheses took one measurement or came within d_merge
+  during the conflict) no longer tells by its hypotheses which target each track had:
+  the re-link of omega to it, and the end of its conflict by P_u, take the pairing whose
+  likelihood is higher against the two tracks' states from before the conflict (bearing,
+  rate and level of k_Auf - 1 predicted with the quiet model; common.sonar.mht_tracks
+  `crossing_order`), instead of the seed's sign of omega's rate, which a young track
+  estimates badly (seeds 1-160 of the crossing scenes: 3 -> 1 swap runs).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
   of the main hypothesis of a confirmed or an older track does not pass the test this
   cycle (its LR counts as at most B). Without it a track born on clutter next to a
@@ -169,7 +176,7 @@ class MhtTracker:
         two = 0.0 < p.q_theta_quiet < p.q_theta
         self.q_models = (p.q_theta_quiet, p.q_theta) if two else (p.q_theta,)
         self.sojourn = np.asarray(p.imm_sojourn_s if two else [1.0], dtype=float)
-        self.tr = TrackArrays()
+        self.tr = TrackArrays(n)
         self.retro = Retrodiction(mht.n_retro, params.history_keep_deleted)
         self.t: float | None = None
         self.t_cycle = 0.0
@@ -260,9 +267,9 @@ class MhtTracker:
                                   mp.A, mp.B, mp.za_krit, mp.za_max)
         self.hc = np.where(norm[self.ht], self.hc / np.where(LR > 0, LR, 1.0)[self.ht], self.hc)
         tr.no_b = np.where(norm | (tr.SA == 1), 0, tr.no_b + 1)  # counted while tentative only
-        conflict_flags(self)
+        conflict_flags(self, t)
         newly = np.flatnonzero((tr.SA == 1) & (was == 0))
-        drop = relink(self, newly)
+        drop = relink(self, newly, t)
         drop |= self._merge_tracks()  # 000 track merge
         _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
         drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)

@@ -24,8 +24,9 @@ _FIELDS: dict[str, tuple[type, float]] = {
     "k_auf": (np.int64, 0), "born": (np.int64, 0), "no_b": (np.int64, 0),
     "pre_rate": (np.float64, 0.0), "pre_amp": (np.float64, 0.0),
     "last_rate": (np.float64, 0.0), "last_amp": (np.float64, 0.0),
-    "ever_confirmed": (np.bool_, False),
-}
+    "ever_confirmed": (np.bool_, False), "coalesced": (np.bool_, False),
+    "pre_t": (np.float64, 0.0), "last_t": (np.float64, 0.0),
+}  # and the states pre_x, pre_P, last_x, last_P of TrackArrays(n)
 
 
 class TrackArrays:
@@ -34,7 +35,10 @@ class TrackArrays:
     -1 none), k_auf (cycle the conflict began), pre_rate / pre_amp (main hypothesis'
     bearing rate and level before the conflict), last_rate / last_amp (the same, last
     cycle), born (cycle of creation), no_b (cycles in a row without LR > B),
-    ever_confirmed."""
+    ever_confirmed; for the end of a coalesced conflict: coalesced (the pair's main
+    hypotheses took one measurement or came within d_merge), pre_t, pre_x (N, n), pre_P
+    (N, n, n) (time, state and covariance of the main hypothesis before the conflict),
+    last_t, last_x, last_P (the same, last cycle)."""
 
     uid: np.ndarray
     SA: np.ndarray
@@ -48,10 +52,21 @@ class TrackArrays:
     last_rate: np.ndarray
     last_amp: np.ndarray
     ever_confirmed: np.ndarray
+    coalesced: np.ndarray
+    pre_t: np.ndarray
+    pre_x: np.ndarray
+    pre_P: np.ndarray
+    last_t: np.ndarray
+    last_x: np.ndarray
+    last_P: np.ndarray
 
-    def __init__(self) -> None:
-        for name, (dtype, _) in _FIELDS.items():
-            setattr(self, name, np.zeros(0, dtype=dtype))
+    def __init__(self, n: int) -> None:
+        """n: the state dimension."""
+        self.shapes: dict[str, tuple[int, ...]] = {name: () for name in _FIELDS}
+        self.shapes.update({"pre_x": (n,), "last_x": (n,), "pre_P": (n, n), "last_P": (n, n)})
+        for name, shape in self.shapes.items():
+            dtype = _FIELDS[name][0] if name in _FIELDS else np.float64
+            setattr(self, name, np.zeros((0,) + shape, dtype=dtype))
         self.next_uid = 1
 
     @property
@@ -61,8 +76,10 @@ class TrackArrays:
     def add(self, k: int, cycle: int) -> np.ndarray:
         """Append k new tentative tracks (000: SA = ZA = 0, no conflict); their slots."""
         start = self.size
-        for name, (dtype, default) in _FIELDS.items():
-            setattr(self, name, np.concatenate([getattr(self, name), np.full(k, default, dtype=dtype)]))
+        for name, shape in self.shapes.items():
+            dtype, default = _FIELDS.get(name, (np.float64, 0.0))
+            setattr(self, name, np.concatenate([getattr(self, name),
+                                                np.full((k,) + shape, default, dtype=dtype)]))
         self.uid[start:] = np.arange(self.next_uid, self.next_uid + k)
         self.born[start:] = cycle
         self.next_uid += k
@@ -75,7 +92,7 @@ class TrackArrays:
 
     def keep(self, mask: np.ndarray) -> None:
         """Keep the tracks of `mask` (slot order preserved)."""
-        for name in _FIELDS:
+        for name in self.shapes:
             setattr(self, name, getattr(self, name)[mask])
 
     def slot_of(self, uid: int) -> int:
@@ -98,23 +115,80 @@ def duplicates(tr: TrackArrays, mmeas: np.ndarray, M: int) -> np.ndarray:
     return (tr.SA == 0) & has & (by_conf[safe] | (oldest[safe] < tr.uid))
 
 
-def conflict_flags(trk: "MhtTracker") -> None:
+def conflict_flags(trk: "MhtTracker", t: float) -> None:
     """000 conflict detection: confirmed tracks whose main hypotheses processed the
-    same measurement get IN = each other; a conflict whose P_u fell below 1e-3 ends."""
+    same measurement get IN = each other; a conflict whose P_u fell below 1e-3 ends
+    (a coalesced pair first gets its crossing order, `crossing_order`)."""
     tr = trk.tr
     main = heaviest(trk.hc, trk.ht, tr.size)
-    meas = np.where(main >= 0, trk.hmeas[np.maximum(main, 0)], -1)
     brg = trk.hx[np.maximum(main, 0), 0]
     res = math.radians(trk.mp.res_deg)
+    ended = []
     for i in np.flatnonzero(tr.IN >= 0):
         j = tr.slot_of(int(tr.IN[i]))
         if j < 0 or unresolved_probability(brg[i] - brg[j], res) < 1e-3:
             tr.IN[i] = -1
+            if j > i and tr.coalesced[i] and main[i] >= 0 and main[j] >= 0:
+                ended.append((int(i), j))
+        elif _coalesced(trk, main, i, j):
+            tr.coalesced[[i, j]] = True
+    if any([crossing_order(trk, i, j, main, t) for i, j in ended]):
+        main = heaviest(trk.hc, trk.ht, tr.size)
+    tr.coalesced[tr.IN < 0] = False
+    meas = np.where(main >= 0, trk.hmeas[np.maximum(main, 0)], -1)
     conf = np.flatnonzero((tr.SA == 1) & (meas >= 0) & (tr.IN < 0))
     _pair_sharing(tr, conf, meas[conf], trk.k)
     ok = main >= 0
-    tr.last_rate[ok] = trk.hx[main[ok], 1]
-    tr.last_amp[ok] = trk.hx[main[ok], 2]
+    m = main[ok]
+    tr.last_rate[ok] = trk.hx[m, 1]
+    tr.last_amp[ok] = trk.hx[m, 2]
+    tr.last_t[ok], tr.last_x[ok], tr.last_P[ok] = t, trk.hx[m], trk.hP[m]
+
+
+def _coalesced(trk: "MhtTracker", main: np.ndarray, i: int, j: int) -> bool:
+    """The main hypotheses of a conflicting pair took one measurement or are closer than
+    d_merge (both follow one target)."""
+    mi, mj = int(main[i]), int(main[j])
+    if mi < 0 or mj < 0:
+        return False
+    if trk.hmeas[mi] >= 0 and trk.hmeas[mi] == trk.hmeas[mj]:
+        return True
+    return bool(pair_distance2(trk.hx[[mi]], trk.hP[[mi]], trk.hx[[mj]], trk.hP[[mj]])[0] < trk.mp.d_merge**2)
+
+
+def continuation(trk: "MhtTracker", s: int, x: np.ndarray, P: np.ndarray, t: float) -> float:
+    """ln N of a state x, P at t (bearing, rate, level) as the continuation of track s's
+    state from before its conflict, predicted with the quiet model's F and Q."""
+    tr = trk.tr
+    T = t - tr.pre_t[s]
+    F = trk._F(T)
+    xp = F @ tr.pre_x[s]
+    S = (P + F @ tr.pre_P[s] @ F.T + trk._Q(T, trk.q_models[0]))[:3, :3]
+    y = x[:3] - xp[:3]
+    y[0] = wrap_pi(y[0])
+    return float(-0.5 * (y @ np.linalg.solve(S, y) + np.linalg.slogdet(S)[1]))
+
+
+def exchanged_likelier(trk: "MhtTracker", i: int, j: int, a: int, b: int, t: float) -> bool:
+    """Whether hypotheses a (now on track i) and b (on j) continue j's and i's states from
+    before the conflict better than i's and j's (`continuation`, both pairings)."""
+    hx, hP = trk.hx, trk.hP
+    held = continuation(trk, i, hx[a], hP[a], t) + continuation(trk, j, hx[b], hP[b], t)
+    swapped = continuation(trk, i, hx[b], hP[b], t) + continuation(trk, j, hx[a], hP[a], t)
+    return swapped > held
+
+
+def crossing_order(trk: "MhtTracker", i: int, j: int, main: np.ndarray, t: float) -> bool:
+    """End of a coalesced conflict (deviation, common.sonar.mht): while the two tracks
+    followed one target their hypotheses no longer told which target each had; when their
+    main hypotheses continue the other's state from before the conflict better than their
+    own (`exchanged_likelier`), the two exchange their hypotheses (each number continues
+    on the target it had before). Returns whether they did."""
+    if not exchanged_likelier(trk, i, j, int(main[i]), int(main[j]), t):
+        return False
+    own, theirs = trk.ht == i, trk.ht == j
+    trk.ht[own], trk.ht[theirs] = j, i
+    return True
 
 
 def _pair_sharing(tr: TrackArrays, slots: np.ndarray, meas: np.ndarray, k: int) -> None:
@@ -126,8 +200,8 @@ def _pair_sharing(tr: TrackArrays, slots: np.ndarray, meas: np.ndarray, k: int) 
         if meas[a] == meas[b] and s != t and tr.IN[s] < 0 and tr.IN[t] < 0:
             tr.IN[s], tr.IN[t] = tr.uid[t], tr.uid[s]
             tr.k_auf[s] = tr.k_auf[t] = k
-            tr.pre_rate[[s, t]] = tr.last_rate[[s, t]]
-            tr.pre_amp[[s, t]] = tr.last_amp[[s, t]]
+            for name in ("rate", "amp", "t", "x", "P"):
+                getattr(tr, "pre_" + name)[[s, t]] = getattr(tr, "last_" + name)[[s, t]]
 
 
 def conflict_pairs(tr: TrackArrays) -> list[tuple[int, int]]:
@@ -191,7 +265,7 @@ def resolve_conflicts(
     return cx, cP, cc, cpar, cmeas
 
 
-def relink(trk: "MhtTracker", newly: np.ndarray) -> np.ndarray:
+def relink(trk: "MhtTracker", newly: np.ndarray, trk_t: float) -> np.ndarray:
     """000 end of a resolution conflict: a track omega confirmed this cycle, younger
     than the conflict of (i, j), whose main hypothesis is within d_Auf of a hypothesis
     of i or j is linked to that track's past (by the bearing-rate sign, then the level
@@ -215,15 +289,18 @@ def relink(trk: "MhtTracker", newly: np.ndarray) -> np.ndarray:
                                     np.repeat(trk.hP[mw][None], h.size, 0), trk.hx[h], trk.hP[h])
                 near.append(bool((d2 < mp.d_auf**2).any()))  # 000 d^2 < d_Auf^2
             mi, mj = int(main[i]), int(main[j])
+            coalesced = False
             if not any(near) and mi >= 0 and mj >= 0:  # coalesced pair (deviation, common.sonar.mht)
                 d2 = pair_distance2(trk.hx[[mi]], trk.hP[[mi]], trk.hx[[mj]], trk.hP[[mj]])[0]
                 same = trk.hmeas[mi] >= 0 and trk.hmeas[mi] == trk.hmeas[mj]
                 off = abs(float(wrap_pi(trk.hx[mw, 0] - trk.hx[mi, 0])))
                 if (same or d2 < mp.d_merge**2) and off < math.radians(mp.relink_deg):
-                    near = [True, True]
+                    near, coalesced = [True, True], True
             if not any(near):
                 continue
-            if all(near):
+            if coalesced:  # deviation: both pairings of omega and the pair's main hypothesis
+                pick = 1 if exchanged_likelier(trk, i, j, mw, mj, trk_t) else 0
+            elif all(near):
                 pick = relink_choice(trk.hx[mw, 1], trk.hx[mw, 2], tr.pre_rate[i], tr.pre_rate[j],
                                      tr.pre_amp[i], tr.pre_amp[j])
             else:

@@ -186,22 +186,61 @@ def test_gate_equals_the_exact_test_of_every_pair_with_its_own_r():
     assert set(zip(hi.tolist(), lj.tolist())) == want and len(want) > 20
 
 
-def test_relink_of_a_new_track_to_a_coalesced_conflicting_pair_by_rate_sign():
-    from common.sonar.mht_tracks import relink
-
+def _coalesced_pair(omega_brg: float | None, mains: tuple[float, float]) -> MhtTracker:
+    """Two confirmed tracks in a conflict since t = 0: before it, track 1 at 1 rad - 2 deg
+    rising and track 2 at 1 rad + 2 deg falling, each by 4 deg over the 400 s to now (they
+    crossed); their main hypotheses now at `mains` (rad), coalesced (one measurement);
+    with omega_brg, a third track (omega) there, young: its rate falling and uncertain."""
     trk = tracker()
-    trk._open(np.array([[1.0, 12.0], [1.0, 12.0], [1.0 + 4 * DEG, 12.0]]), np.full((3, 2), [DEG**2, 4.0]))
+    b = [mains[0], mains[1]] + ([omega_brg] if omega_brg is not None else [])
+    trk._open(np.column_stack([b, np.full(len(b), 12.0)]), np.tile([DEG**2, 4.0], (len(b), 1)))
     tr = trk.tr
     tr.SA[:] = 1
     tr.IN[:2] = [tr.uid[1], tr.uid[0]]
-    tr.k_auf[:2], tr.born[2] = 5, 9
-    tr.pre_rate[:2] = [-1e-4, 2e-4]  # before the conflict: track 1 falling, track 2 rising
-    trk.hx[2, 1] = 1.5e-4  # omega rises
-    trk.hmeas = np.array([4, 4, 7])  # the pair's main hypotheses took one measurement
-    drop = relink(trk, np.array([2]))
-    # omega (11 sigma from both, beyond d_Auf) continues track 2, whose rate sign it has
+    tr.k_auf[:2] = 5
+    tr.born[2:] = 9
+    rate = 4 * DEG / 400.0
+    tr.pre_t[:2] = 0.0
+    tr.pre_x[:2] = [[1.0 - 2 * DEG, rate, 12.0, 0.0], [1.0 + 2 * DEG, -rate, 12.0, 0.0]]
+    tr.pre_P[:2] = np.diag([0.2 * DEG**2, (0.1 * rate) ** 2, 1.0, 1e-4])
+    tr.pre_rate[:2] = [rate, -rate]
+    trk.hx[:2, 1] = -rate  # the pair follows the falling target
+    trk.hP[:2] = np.diag([0.2 * DEG**2, (0.2 * rate) ** 2, 1.0, 1e-4])
+    trk.hmeas = np.array([4, 4, 7][: len(b)])
+    if omega_brg is not None:
+        trk.hx[2, 1] = -0.5 * rate
+        trk.hP[2] = np.diag([DEG**2, (3 * rate) ** 2, 4.0, 1e-2])
+    return trk
+
+
+def test_relink_of_a_new_track_to_a_coalesced_pair_by_the_continuation_of_both():
+    """Both tracks crossed, then followed the falling target (coalesced at 1 rad - 2 deg);
+    omega, the rising target's new track at 1 rad + 2 deg, continues track 1's state from
+    before the conflict (rising from - 2 deg) and the pair continues track 2's, although
+    omega's young rate estimate is falling (the seed's sign rule would give it track 2)."""
+    from common.sonar.mht_conflict import relink_choice
+    from common.sonar.mht_tracks import relink
+
+    trk = _coalesced_pair(1.0 + 2 * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
+    tr = trk.tr
+    assert relink_choice(trk.hx[2, 1], 12.0, tr.pre_rate[0], tr.pre_rate[1], 12.0, 12.0) == 1
+    drop = relink(trk, np.array([2]), 400.0)
     assert drop.tolist() == [False, False, True]
-    assert trk.ht.tolist() == [0, 2, 1] and (tr.IN[:2] == -1).all()
+    assert trk.ht.tolist() == [2, 1, 0] and (tr.IN[:2] == -1).all()  # track 1 goes on with omega
+
+
+@pytest.mark.parametrize("mains, exchanged", [((1.0 - 2 * DEG, 1.0 + 2 * DEG), True),
+                                              ((1.0 + 2 * DEG, 1.0 - 2 * DEG), False)])
+def test_a_coalesced_pair_leaving_its_conflict_takes_the_order_it_had_before(mains, exchanged):
+    """At the end of a coalesced conflict each track keeps the main hypothesis that
+    continues its own state from before: split in the bounced order (track 1 below, where
+    the falling target went), the two exchange their hypotheses; in the crossed order not."""
+    from common.sonar.mht_tracks import crossing_order
+
+    trk = _coalesced_pair(None, mains)
+    main = np.array([0, 1])
+    assert crossing_order(trk, 0, 1, main, 400.0) is exchanged
+    assert trk.ht.tolist() == ([1, 0] if exchanged else [0, 1])
 
 
 def test_register_holds_the_targets_own_detections_with_their_sigma():
