@@ -27,10 +27,8 @@ Deviations (stated):
   that SA demotes gets those cycles too: its misses while still confirmed do not count),
   and any track whose bearing sigma exceeds `sigma_max_deg` (a target lost for good would
   otherwise coast forever).
-- "Covariances not excessive" (track merge): both bearing sigmas below
-  `merge_sigma_max_deg`.
-- Order: conflicts are handled before pruning (the seed: after the usual Kalman update),
-  so that pruning sees the re-weighted hypotheses.
+- "Covariances not excessive" (track merge): both bearing sigmas below `merge_sigma_max_deg`.
+- Order: conflicts are handled before pruning (the seed: after the usual Kalman update).
 - Conflict start: besides the seed's rule (the main hypotheses of two confirmed tracks
   took the same measurement), a conflict starts when their main predicted hypotheses
   gate a common measurement, so that the first shared measurement is already
@@ -47,17 +45,13 @@ Deviations (stated):
   omega removed. The seed re-links only when omega is within d_Auf of a hypothesis of
   i or j; when i and j have coalesced on one target (their main hypotheses took the same
   measurement or are closer than d_merge: both followed one target out of a slow
-  crossing), omega, the lost
-  target's new track, is far from both, so it is re-linked when within relink_deg of
-  them. A conflict also ends when P_u of the pair's main hypotheses falls below 1e-3 (the
-  seed ends it by the re-link only).
-- A coalesced pair (its main hypotheses took one measurement or came within d_merge
-  during the conflict) no longer tells by its hypotheses which target each track had:
-  the re-link of omega to it, and the end of its conflict by P_u, take the pairing whose
-  likelihood is higher against the two tracks' states from before the conflict (bearing,
-  rate and level of k_Auf - 1 predicted with the quiet model; common.sonar.mht_tracks
-  `crossing_order`), instead of the seed's sign of omega's rate, which a young track
-  estimates badly (seeds 1-160 of the crossing scenes: 3 -> 1 swap runs).
+  crossing), omega, the lost target's new track, is far from both: it is re-linked when
+  within relink_deg of them, to the one whose state from before the conflict (k_Auf - 1,
+  predicted by the quiet model) it continues likelier, the pair's main hypothesis going on
+  the other (both pairings; the seed's sign of omega's rate, a young track's estimate,
+  chose wrong: common.sonar.mht_tracks `exchanged_likelier`). A conflict also ends when
+  P_u of the pair's main hypotheses falls below 1e-3 (the seed ends it by the re-link
+  only); a pair coalesced in it then takes the likelier order (`crossing_order`).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
   of the main hypothesis of a confirmed or an older track does not pass the test this
   cycle (its LR counts as at most B). Without it a track born on clutter next to a
