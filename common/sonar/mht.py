@@ -28,7 +28,7 @@ Deviations (stated):
   and any track whose bearing sigma exceeds `sigma_max_deg` (a target lost for good would
   otherwise coast forever).
 - "Covariances not excessive" (track merge): both bearing sigmas below `merge_sigma_max_deg`.
-- Order: conflicts are handled before pruning (the seed: after the usual Kalman update).
+- Order: conflicts before pruning (the seed: after the Kalman update): pruning sees their weights.
 - Conflict start: besides the seed's rule (the main hypotheses of two confirmed tracks
   took the same measurement), a conflict starts when their main predicted hypotheses
   gate a common measurement, so that the first shared measurement is already
