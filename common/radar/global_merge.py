@@ -37,7 +37,13 @@ passes [48] against a live component of the other's mixture, and not the reverse
 track that explains the other keeps its state (and number, but for `number_kept`) and
 takes its elementary tracks. A track still holding both targets' elementary tracks,
 each explained by another track, is deleted: 001 module 61 removes "aberrant" global
-tracks without saying how they are found.
+tracks without saying how they are found. A confirmed track located this cycle (module
+64's joint test of its elementary tracks passed, which a pair of two targets' elementary
+tracks fails: the confirmation rule of common.radar.global_fusion) is not dissolved: on
+dense1000.toml seed 1 (benchmarks/origin_switches.py) 6 of the 8 confirmed tracks
+dissolved held one aircraft's elementary tracks only, each explained by a neighbour whose
+altitude sigma of ~1 km let it pass [48] at the bases it lacked, and their aircraft took
+a new number a few scans later.
 
 Numbers (`number_kept`): when only the dropped track of a merged pair is confirmed, the
 kept track (its state, elementary tracks and confirmation) takes the dropped track's
@@ -95,7 +101,8 @@ def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: fl
 
 def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, row: np.ndarray,
               E: ETrackSet, tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float,
-              busy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              busy: np.ndarray, held: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The second test (module doc) over N tracks (mixtures w, xc, Pc:
     common.radar.global_mixture; has (N, B); row (N, B) their elementary tracks this
     cycle, rows of E, -1 = none): (keep, drop, dissolve), indices into the N tracks.
@@ -107,7 +114,8 @@ def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, ro
     one pair at most, none of `busy`. dissolve: the other tracks with >= 2 elementary
     tracks each explained by some track, none of which they explain entirely: the
     elementary tracks of several targets (a pair of two targets, module doc); they
-    are deleted and module 63 gives their elementary tracks at the next cycle."""
+    are deleted and module 63 gives their elementary tracks at the next cycle, but for
+    the tracks of `held` (N,) (module doc: confirmed and located this cycle)."""
     N, B = has.shape
     owner = np.full(len(E), -1)
     t, b = np.nonzero(row >= 0)
@@ -141,6 +149,8 @@ def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, ro
             keep.append(i[p])
             drop.append(j[p])
     dissolve = (covered.sum(axis=1) == n_meas) & (n_meas >= 2) & ~explains_one & ~used
+    if held is not None:
+        dissolve &= ~held
     return (np.array(keep, dtype=np.intp), np.array(drop, dtype=np.intp),
             np.flatnonzero(dissolve))
 
@@ -162,7 +172,8 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
                            tab.has[live], gamma)
     first = tab.born[live[a]] <= tab.born[live[b]]
     k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
-                           tx, rx, az_gate, gamma, np.r_[a, b])
+                           tx, rx, az_gate, gamma, np.r_[a, b],
+                           tab.confirmed[live] & tab.located[live])
     keep, drop = live[np.r_[np.where(first, a, b), k]], live[np.r_[np.where(first, b, a), d]]
     tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
     tab.has[keep] |= tab.has[drop]
