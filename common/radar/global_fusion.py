@@ -150,7 +150,7 @@ class FusionParams(InitParams):
     meas_inflation: float = 1.0
     confirm_cycles: int = 3
     confirm_bases: int = 2
-    max_coast: int = 5
+    max_coast: int = 10
     coast_cycles: int = 2
     max_wait: float = 3.0
     max_lead: float = 600.0
