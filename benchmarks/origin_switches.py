@@ -12,8 +12,8 @@ last track while that track is labelled with it, else takes the one labelled wit
 that the GOSPA assignment gives it, else the lowest number labelled with it. Switches
 of that series (common.evaluation.metrics.count_switches) are association errors:
 a track fed by another aircraft's elementary tracks, or replaced by a new one.
-A GOSPA switch whose previous track is still labelled with the truth at the switch is
-a crossing of the scoring (a correctly fed track scored on another truth).
+A GOSPA switch at which the truth keeps its track by origin (the same, on both scans)
+is a crossing of the scoring: the truth's correctly fed track scored on another truth.
 """
 
 from __future__ import annotations
@@ -39,7 +39,6 @@ class OriginLabels:
         self.gate = chi2_gate(prob, 3)
         self.elem: dict[tuple[int, int], int] = {}  # (base index, elementary id) -> truth
         self.series: list[dict[int, int | None]] = []
-        self.labels: list[dict[int, int]] = []  # per scan: global track id -> truth
         self.by_truth: dict[int, int] = {}
 
     def etracks(self, b: int, tracks: ElementaryTracks, truth_ids: np.ndarray,
@@ -90,18 +89,19 @@ class OriginLabels:
             if pick is not None:
                 self.by_truth[i] = pick
         self.series.append(step)
-        self.labels.append(label)
 
     def summary(self, gospa_series: list[dict[int, int | None]]) -> tuple[int, int, int]:
         """(switches by origin, GOSPA switches, of them crossings of the scoring)."""
         last: dict[int, int] = {}
         gospa_sw = crossing = 0
-        for step, label in zip(gospa_series, self.labels):
+        before: dict[int, int | None] = {}
+        for step, own in zip(gospa_series, self.series):
             for i, k in step.items():
                 if k is None:
                     continue
                 if i in last and last[i] != k:
                     gospa_sw += 1
-                    crossing += label.get(last[i]) == i
+                    crossing += before.get(i) is not None and before.get(i) == own.get(i)
                 last[i] = k
+            before = own
         return count_switches(self.series).switches, gospa_sw, crossing

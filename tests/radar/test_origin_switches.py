@@ -58,4 +58,4 @@ def test_fed_by_the_other_truth_is_an_origin_switch() -> None:
 def test_scoring_crossing_of_correctly_fed_tracks() -> None:
     held = {7: 10, 8: 20}
     crossed = {7: 20, 8: 10}
-    assert run([[1, 2], [1, 2], [1, 2]], [held, crossed, held]) == (0, 4, 2)
+    assert run([[1, 2], [1, 2], [1, 2]], [held, crossed, held]) == (0, 4, 4)
