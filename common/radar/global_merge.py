@@ -18,7 +18,14 @@ that can pass the test, so the cost is near-linear in the number of tracks. Pair
 merged closest first, each track at most once per cycle: the older track keeps its
 number and takes the other's elementary tracks; the other is deleted.
 Tracks that share a base are never merged (two targets, each seen by every base, may
-come as close as they like).
+come as close as they like). A track without contributors (coasting) pairs too: when
+every base loses a target at once (near the receiver, where the azimuth rate common to
+all bases is high), its new elementary tracks can start a new track before the
+coasting one gates them (dense1000.toml seed 2, aircraft 380: a new track in the scan of
+the loss, the coasting prediction within 20 m of the aircraft). The track with
+contributors is then the kept one (its state rests on data; keeping an older coasting
+track's state instead lost a well-held aircraft's four elementary tracks on
+dense1000.toml seed 3), and takes the coasting track's number by `number_kept`.
 
 Second test, in the bases' measurement space (`explained`): the Cartesian test misses
 the duplicates whose altitude is wrong with a small sigma_z. Measured on dense1000.toml
@@ -67,9 +74,9 @@ from common.radar.global_assoc import ETrackSet, gated_component_pairs
 
 def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: float
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i, j) (indices into the N tracks, i < j) of tracks with disjoint, non-empty
-    base sets (has (N, B)) whose positions pos (N, 3), covariances cov (N, 3, 3) pass
-    d^2 <= gamma (module doc), closest first, each track in at most one pair."""
+    """Pairs (i, j) (indices into the N tracks, i < j) of tracks with disjoint base sets,
+    not both empty (has (N, B)), whose positions pos (N, 3), covariances cov (N, 3, 3)
+    pass d^2 <= gamma (module doc), closest first, each track in at most one pair."""
     e = np.zeros(0, dtype=np.intp)
     if pos.shape[0] < 2:
         return e, e
@@ -82,7 +89,7 @@ def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: fl
     keep = a < b
     key = np.unique(a[keep] * pos.shape[0] + b[keep])
     a, b = key // pos.shape[0], key % pos.shape[0]
-    ok = has[a].any(axis=1) & has[b].any(axis=1) & ~(has[a] & has[b]).any(axis=1)
+    ok = (has[a].any(axis=1) | has[b].any(axis=1)) & ~(has[a] & has[b]).any(axis=1)
     a, b = a[ok], b[ok]
     d = pos[a] - pos[b]
     d2 = np.einsum("pi,pi->p", d, np.linalg.solve(cov[a] + cov[b], d[..., None])[..., 0])
@@ -165,12 +172,14 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
                  tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Both tests on the live tracks (slots `live` of the global track table, r their rows
-    of E): the kept track of each pair takes the other's elementary tracks and score (the
-    older one keeps its number, but for `number_kept`). Returns (slots to delete: the
+    of E): the kept track of each pair (the older, or the one with contributors: module
+    doc) takes the other's elementary tracks and score and keeps its number, but for
+    `number_kept`. Returns (slots to delete: the
     merged-away and the dissolved tracks, slots now under another number)."""
     a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                            tab.has[live], gamma)
-    first = tab.born[live[a]] <= tab.born[live[b]]
+    with_a, with_b = tab.has[live[a]].any(axis=1), tab.has[live[b]].any(axis=1)
+    first = np.where(with_a & with_b, tab.born[live[a]] <= tab.born[live[b]], with_a)
     k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
                            tx, rx, az_gate, gamma, np.r_[a, b],
                            tab.confirmed[live] & tab.located[live])
