@@ -23,22 +23,23 @@ Goals (issue 14, checked for scenes of >= 300 targets): missed < 2 % and false <
 scan, switches < 1 per 100 targets, RMSE/PCRLB <= 1.5, mean NEES within a factor 1.5 of
 the dimension (2-4.5 for the 3-D position).
 
-Current (2026-11-26, 230de11 and later: the association work of issue 14 in
+Current (2026-11-26, 5cbaac4 and later: the association work of issue 14 in
 docs/radar_at_scale.md; 120 s; CPU ms per scan on 2 cores shared with another session):
 
   scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES  origin cross
   seed 1:
-  dense          120     1.3     3.5    13.8   53.7  0.6 (0.5%)   0.2 (0.2%)    0.00   5.00   0.92     3.08   0.00  0.00
-  dense300       300     2.5     6.9    30.5   25.1  1.5 (0.5%)   0.6 (0.2%)    0.67   3.00   0.92     3.21   0.00  0.67
-  dense1000     1000     8.7    25.4   120.3    6.5  7.1 (0.8%)   2.4 (0.3%)    3.50   3.70   0.96     3.07   1.00  2.40
+  dense          120     1.4     3.8    14.9   49.6  0.6 (0.5%)   0.2 (0.2%)    0.00   5.00   0.92     3.08   0.00  0.00
+  dense300       300     2.5     7.0    32.1   24.0  1.5 (0.5%)   0.6 (0.2%)    0.67   3.00   0.92     3.21   0.00  0.67
+  dense1000     1000     8.7    25.6   124.0    6.3  7.1 (0.8%)   2.4 (0.3%)    3.50   3.70   0.96     3.08   1.00  2.40
   seed 2:
-  dense          120     1.5     3.7    14.3   51.2  0.7 (0.6%)   0.3 (0.2%)    0.83   3.33   0.94     2.88   0.83  0.00
-  dense300       300     2.6     7.2    31.8   24.0  1.6 (0.6%)   0.5 (0.2%)    1.33   2.00   0.95     3.12   0.00  1.33
-  dense1000     1000     8.3    24.2   114.3    6.8 11.3 (1.2%)   7.1 (0.8%)    3.40   4.00   0.99     3.66   0.90  2.30
-  log-log slope of the cost per scan, 120 -> 1000 targets: plotter 0.89, tracker 0.94,
-  fusion 1.03. Failing goals: switches of dense1000 (both seeds) and of dense300 seed 2.
+  dense          120     1.5     3.9    14.7   49.8  0.7 (0.6%)   0.3 (0.2%)    0.83   3.33   0.94     2.88   0.83  0.00
+  dense300       300     2.7     7.4    32.6   23.4  1.6 (0.6%)   0.5 (0.2%)    1.33   2.00   0.95     3.12   0.00  1.33
+  dense1000     1000     8.6    25.2   117.3    6.6 11.3 (1.2%)   7.1 (0.8%)    3.20   4.00   0.99     3.67   0.70  2.30
+  log-log slope of the cost per scan, 120 -> 1000 targets: plotter 0.86, tracker 0.91,
+  fusion 1.01. Failing goals: switches of dense1000 (both seeds) and of dense300 seed 2.
   Most of them cross two tracks each fed by its own aircraft, with honest altitude
-  errors (docs/radar_at_scale.md: 24 of seed 1's 35 on dense1000, all of dense300's).
+  errors (docs/radar_at_scale.md: 24 of seed 1's 35 on dense1000, 23 of seed 2's 32,
+  all of dense300's).
 
 Every earlier measurement, the traces that found each cause and the variants tried:
 docs/radar_at_scale.md.
