@@ -150,7 +150,7 @@ class FusionParams(InitParams):
     meas_inflation: float = 1.0
     confirm_cycles: int = 3
     confirm_bases: int = 2
-    max_coast: int = 5
+    max_coast: int = 10
     coast_cycles: int = 2
     max_wait: float = 3.0
     max_lead: float = 600.0
@@ -185,7 +185,7 @@ class GlobalFusion:
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "n_quiet": ((), np.int64),
                                           "born": ((), float), "confirmed": ((), bool),
-                                          "ambiguous": ((), bool),
+                                          "located": ((), bool), "ambiguous": ((), bool),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
                                           "mu": ((K,), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
@@ -361,7 +361,7 @@ class GlobalFusion:
         active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
         tab.has[live] &= ~fix.dropped
         row[live] = r = np.where(fix.dropped, -1, r)
-        located = fix.located
+        tab.located[live] = located = fix.located  # global_merge.explained's held
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
                                         n_meas=int(located.sum()))

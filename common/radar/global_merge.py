@@ -18,7 +18,14 @@ that can pass the test, so the cost is near-linear in the number of tracks. Pair
 merged closest first, each track at most once per cycle: the older track keeps its
 number and takes the other's elementary tracks; the other is deleted.
 Tracks that share a base are never merged (two targets, each seen by every base, may
-come as close as they like).
+come as close as they like). A track without contributors (coasting) pairs too: when
+every base loses a target at once (near the receiver, where the azimuth rate common to
+all bases is high), its new elementary tracks can start a new track before the
+coasting one gates them (dense1000.toml seed 2, aircraft 380: a new track in the scan of
+the loss, the coasting prediction within 20 m of the aircraft). The track with
+contributors is then the kept one (its state rests on data; keeping an older coasting
+track's state instead lost a well-held aircraft's four elementary tracks on
+dense1000.toml seed 3), and takes the coasting track's number by `number_kept`.
 
 Second test, in the bases' measurement space (`explained`): the Cartesian test misses
 the duplicates whose altitude is wrong with a small sigma_z. Measured on dense1000.toml
@@ -37,7 +44,13 @@ passes [48] against a live component of the other's mixture, and not the reverse
 track that explains the other keeps its state (and number, but for `number_kept`) and
 takes its elementary tracks. A track still holding both targets' elementary tracks,
 each explained by another track, is deleted: 001 module 61 removes "aberrant" global
-tracks without saying how they are found.
+tracks without saying how they are found. A confirmed track located this cycle (module
+64's joint test of its elementary tracks passed, which a pair of two targets' elementary
+tracks fails: the confirmation rule of common.radar.global_fusion) is not dissolved: on
+dense1000.toml seed 1 (benchmarks/origin_switches.py) 6 of the 8 confirmed tracks
+dissolved held one aircraft's elementary tracks only, each explained by a neighbour whose
+altitude sigma of ~1 km let it pass [48] at the bases it lacked, and their aircraft took
+a new number a few scans later.
 
 Numbers (`number_kept`): when only the dropped track of a merged pair is confirmed, the
 kept track (its state, elementary tracks and confirmation) takes the dropped track's
@@ -61,9 +74,9 @@ from common.radar.global_assoc import ETrackSet, gated_component_pairs
 
 def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: float
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i, j) (indices into the N tracks, i < j) of tracks with disjoint, non-empty
-    base sets (has (N, B)) whose positions pos (N, 3), covariances cov (N, 3, 3) pass
-    d^2 <= gamma (module doc), closest first, each track in at most one pair."""
+    """Pairs (i, j) (indices into the N tracks, i < j) of tracks with disjoint base sets,
+    not both empty (has (N, B)), whose positions pos (N, 3), covariances cov (N, 3, 3)
+    pass d^2 <= gamma (module doc), closest first, each track in at most one pair."""
     e = np.zeros(0, dtype=np.intp)
     if pos.shape[0] < 2:
         return e, e
@@ -76,7 +89,7 @@ def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: fl
     keep = a < b
     key = np.unique(a[keep] * pos.shape[0] + b[keep])
     a, b = key // pos.shape[0], key % pos.shape[0]
-    ok = has[a].any(axis=1) & has[b].any(axis=1) & ~(has[a] & has[b]).any(axis=1)
+    ok = (has[a].any(axis=1) | has[b].any(axis=1)) & ~(has[a] & has[b]).any(axis=1)
     a, b = a[ok], b[ok]
     d = pos[a] - pos[b]
     d2 = np.einsum("pi,pi->p", d, np.linalg.solve(cov[a] + cov[b], d[..., None])[..., 0])
@@ -95,7 +108,8 @@ def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: fl
 
 def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, row: np.ndarray,
               E: ETrackSet, tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float,
-              busy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              busy: np.ndarray, held: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The second test (module doc) over N tracks (mixtures w, xc, Pc:
     common.radar.global_mixture; has (N, B); row (N, B) their elementary tracks this
     cycle, rows of E, -1 = none): (keep, drop, dissolve), indices into the N tracks.
@@ -107,7 +121,8 @@ def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, ro
     one pair at most, none of `busy`. dissolve: the other tracks with >= 2 elementary
     tracks each explained by some track, none of which they explain entirely: the
     elementary tracks of several targets (a pair of two targets, module doc); they
-    are deleted and module 63 gives their elementary tracks at the next cycle."""
+    are deleted and module 63 gives their elementary tracks at the next cycle, but for
+    the tracks of `held` (N,) (module doc: confirmed and located this cycle)."""
     N, B = has.shape
     owner = np.full(len(E), -1)
     t, b = np.nonzero(row >= 0)
@@ -141,6 +156,8 @@ def explained(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, has: np.ndarray, ro
             keep.append(i[p])
             drop.append(j[p])
     dissolve = (covered.sum(axis=1) == n_meas) & (n_meas >= 2) & ~explains_one & ~used
+    if held is not None:
+        dissolve &= ~held
     return (np.array(keep, dtype=np.intp), np.array(drop, dtype=np.intp),
             np.flatnonzero(dissolve))
 
@@ -155,14 +172,17 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
                  tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Both tests on the live tracks (slots `live` of the global track table, r their rows
-    of E): the kept track of each pair takes the other's elementary tracks and score (the
-    older one keeps its number, but for `number_kept`). Returns (slots to delete: the
+    of E): the kept track of each pair (the older, or the one with contributors: module
+    doc) takes the other's elementary tracks and score and keeps its number, but for
+    `number_kept`. Returns (slots to delete: the
     merged-away and the dissolved tracks, slots now under another number)."""
     a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                            tab.has[live], gamma)
-    first = tab.born[live[a]] <= tab.born[live[b]]
+    with_a, with_b = tab.has[live[a]].any(axis=1), tab.has[live[b]].any(axis=1)
+    first = np.where(with_a & with_b, tab.born[live[a]] <= tab.born[live[b]], with_a)
     k, d, gone = explained(tab.mu[live], tab.xm[live], tab.Pm[live], tab.has[live], r, E,
-                           tx, rx, az_gate, gamma, np.r_[a, b])
+                           tx, rx, az_gate, gamma, np.r_[a, b],
+                           tab.confirmed[live] & tab.located[live])
     keep, drop = live[np.r_[np.where(first, a, b), k]], live[np.r_[np.where(first, b, a), d]]
     tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
     tab.has[keep] |= tab.has[drop]

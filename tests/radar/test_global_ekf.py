@@ -213,3 +213,22 @@ def test_output_independent_of_arrival_order() -> None:
     skewed = _outputs([[c[b] for c in cycles] for b in (0, 1, 2)])
     assert permuted == ref
     assert skewed == ref
+
+
+def test_confirmed_track_bridges_a_gap_of_eight_cycles() -> None:
+    """Target 0 is reported by no base for 8 cycles (dense1000.toml: an aircraft
+    overflying the receiver loses every elementary track for 6-7 scans, the azimuth
+    rate being shared by all bases), then comes back: with the default max_coast its
+    global track coasts through the gap instead of being deleted, and is confirmed at
+    once when its elementary tracks return (a new track would be tentative)."""
+    syn = _Synth(np.random.default_rng(8))
+    gf = GlobalFusion(BASES, FusionParams())
+    for k in range(8):
+        out = [o for m in syn.messages(float(k)) for o in push(gf, m)][0]
+    assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
+    for k in range(8, 16):
+        out = [o for m in syn.messages(float(k), drop={0}) for o in push(gf, m)][0]
+        assert len(out["tracks"]) == 2
+    out = [o for m in syn.messages(16.0) for o in push(gf, m)][0]
+    assert sorted(tr["id"] for tr in out["tracks"]) == [1, 2]
+    assert all(tr["status"] == "confirmed" and tr["etracks"] for tr in out["tracks"])

@@ -103,3 +103,35 @@ def test_the_merged_pair_keeps_the_confirmed_number() -> None:
     assert out.id.tolist() == [tab.id[1]] and not tab.confirmed[1] and tab.born[1] == 2.0
     np.testing.assert_array_equal(out.x[0], TRUTH)
     assert out.has[0].tolist() == [True, True, True, False]
+
+
+def test_a_confirmed_located_track_is_not_dissolved() -> None:
+    """The geometry of the dissolved pair above, through module 61 (_manage): the track
+    whose elementary tracks the other tracks explain is kept when it is confirmed and
+    was located this cycle (module 64's joint test passed, which a pair of two targets
+    fails; dense1000.toml seed 1: 6 of the 8 confirmed tracks dissolved held one
+    aircraft's elementary tracks, each explained by wide-altitude neighbours), and
+    dissolved otherwise (global_merge.explained's held)."""
+    other = TRUTH + [2000.0, 40.0, 1500.0, 0.0, 1000.0, 0.0]
+    E = _etracks(np.stack([TRUTH, TRUTH, other, other, TRUTH, other]),
+                 np.array([0, 1, 0, 1, 2, 3]))
+    ghost = 0.5 * (TRUTH + other) + [0.0, 0.0, 0.0, 0.0, 8000.0, 0.0]
+    P = np.diag([200.0**2, 10.0**2, 200.0**2, 10.0**2, 300.0**2, 3.0**2])
+    row = np.array([[0, 1, -1, -1], [2, 3, -1, -1], [-1, -1, 4, 5]])
+    kept = []
+    for confirmed, located in [(True, True), (True, False), (False, True)]:
+        gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(4)],
+                          FusionParams())
+        tab = gf.table
+        slots = tab.add(3)
+        tab.x[slots], tab.P[slots] = np.stack([TRUTH, other, ghost]), P
+        tab.xm[slots], tab.Pm[slots] = tab.x[slots][:, None], P
+        tab.mu[slots] = np.eye(1, tab.mu.shape[1])
+        tab.Pm[2, 0, 4, 4] = 150.0**2
+        tab.has[slots] = [[True, True, False, False], [True, True, False, False],
+                          [False, False, True, True]]
+        tab.member[slots] = [[0, 2, 0, 0], [1, 3, 0, 0], [0, 0, 4, 5]]
+        tab.confirmed[slots] = [True, True, confirmed]
+        tab.located[slots] = [True, True, located]
+        kept.append(len(gf._manage(10.0, E, row)))
+    assert kept == [3, 2, 2]

@@ -53,9 +53,55 @@ def test_empty_tracks_and_random_superset() -> None:
     a, b = np.triu_indices(n, 1)
     d = pos[a] - pos[b]
     d2 = np.einsum("pi,pi->p", d, np.linalg.solve(cov[a] + cov[b], d[..., None])[..., 0])
-    ok = (d2 <= GAMMA) & has[a].any(1) & has[b].any(1) & ~(has[a] & has[b]).any(1)
+    ok = (d2 <= GAMMA) & (has[a].any(1) | has[b].any(1)) & ~(has[a] & has[b]).any(1)
     paired = set(i.tolist()) | set(j.tolist())
     assert all(a[p] in paired or b[p] in paired for p in np.flatnonzero(ok))  # maximal
     assert {(x, y) for x, y in zip(i, j)} <= set(zip(a[ok].tolist(), b[ok].tolist()))
     assert len(paired) == 2 * i.size
     assert duplicate_pairs(pos[:1], cov[:1], has[:1], GAMMA)[0].size == 0
+
+
+def test_a_coasting_track_pairs_with_the_track_that_took_its_target() -> None:
+    """A track without contributors (coasting: dense1000.toml seed 2, aircraft 380 near
+    the receiver lost every elementary track for 2 scans, its track's prediction stayed
+    within 20 m) pairs with a track holding that target's new elementary tracks; two
+    tracks without contributors do not."""
+    pos = np.array([[0.0, 0.0, 5000.0], [40.0, -20.0, 5050.0]])
+    cov = np.tile(np.eye(3) * 30.0**2, (2, 1, 1))
+    i, j = duplicate_pairs(pos, cov, _has((), (0, 1, 2)), GAMMA)
+    assert list(zip(i, j)) == [(0, 1)]
+    assert duplicate_pairs(pos, cov, _has((), ()), GAMMA)[0].size == 0
+
+
+def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None:
+    """Module 61 (_manage) on a confirmed coasting track (slot 0, no contributors, the
+    older) and a tentative track holding the target's new elementary tracks (slot 1):
+    one track is left, with slot 1's state and elementary tracks, under the coasting
+    track's number and birth time (global_merge.number_kept)."""
+    from common.deploy.config import RadarBase
+    from common.radar.bistatic import project
+    from common.radar.global_assoc import ETrackSet
+    from common.radar.global_fusion import FusionParams, GlobalFusion
+
+    rx = np.array([0.0, 0.0, 30.0])
+    tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])
+    truth = np.array([18000.0, 120.0, 30000.0, -150.0, 3000.0, 0.0])
+    gf = GlobalFusion([RadarBase(f"b{k}", tx[k], rx, ["c1"]) for k in range(2)], FusionParams())
+    tab = gf.table
+    slots = tab.add(2)
+    P = np.diag([40.0**2, 5.0**2, 40.0**2, 5.0**2, 60.0**2, 2.0**2])
+    tab.x[slots] = np.stack([truth + [30.0, 0.0, -20.0, 0.0, 40.0, 0.0], truth])
+    tab.P[slots] = P
+    tab.xm[slots], tab.Pm[slots] = tab.x[slots][:, None], P
+    tab.mu[slots] = np.eye(1, tab.mu.shape[1])
+    tab.has[slots] = [[False, False], [True, True]]
+    tab.member[slots] = [[0, 0], [4, 5]]
+    tab.confirmed[slots], tab.born[slots] = [True, False], [2.0, 50.0]
+    y = np.array([project(truth[None], tx[k], rx)[0] for k in range(2)])
+    R = np.tile(np.diag([40.0**2, 0.5**2, np.radians(0.3) ** 2]), (2, 1, 1))
+    one, no = np.ones(2, dtype=bool), np.zeros(2, dtype=bool)
+    E = ETrackSet(np.array([0, 1]), np.array([4, 5]), y, R, np.ones(2), one, one, no, y, R, one)
+    out = gf._manage(52.0, E, np.array([[-1, -1], [0, 1]]))
+    assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and not tab.confirmed[0]
+    np.testing.assert_array_equal(out.x[0], truth)
+    assert out.has[0].tolist() == [True, True] and out.member[0].tolist() == [4, 5]
