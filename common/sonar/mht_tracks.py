@@ -265,13 +265,14 @@ def resolve_conflicts(
     return cx, cP, cc, cpar, cmeas
 
 
-def relink(trk: "MhtTracker", newly: np.ndarray, trk_t: float) -> np.ndarray:
-    """000 end of a resolution conflict: a track omega confirmed this cycle, younger
-    than the conflict of (i, j), whose main hypothesis is within d_Auf of a hypothesis
-    of i or j is linked to that track's past (by the bearing-rate sign, then the level
-    from before the conflict, when near both; also when i and j have coalesced, i.e.
-    their main hypotheses took the same measurement or are closer than d_merge, and
-    omega is within relink_deg of them). Returns the mask of tracks to delete."""
+def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
+    """000 end of a resolution conflict: a track omega confirmed this cycle (time t),
+    younger than the conflict of (i, j), whose main hypothesis is within d_Auf of a
+    hypothesis of i or j is linked to that track's past (by the bearing-rate sign, then
+    the level from before the conflict, when near both); when i and j have coalesced
+    (`_coalesced`) and omega is within relink_deg of them, to the one whose state from
+    before the conflict omega continues likelier (`exchanged_likelier`). Returns the
+    mask of tracks to delete."""
     tr, mp = trk.tr, trk.mp
     drop = np.zeros(tr.size, dtype=bool)
     if newly.size == 0:
@@ -288,18 +289,15 @@ def relink(trk: "MhtTracker", newly: np.ndarray, trk_t: float) -> np.ndarray:
                 d2 = pair_distance2(np.repeat(trk.hx[mw][None], h.size, 0),
                                     np.repeat(trk.hP[mw][None], h.size, 0), trk.hx[h], trk.hP[h])
                 near.append(bool((d2 < mp.d_auf**2).any()))  # 000 d^2 < d_Auf^2
-            mi, mj = int(main[i]), int(main[j])
             coalesced = False
-            if not any(near) and mi >= 0 and mj >= 0:  # coalesced pair (deviation, common.sonar.mht)
-                d2 = pair_distance2(trk.hx[[mi]], trk.hP[[mi]], trk.hx[[mj]], trk.hP[[mj]])[0]
-                same = trk.hmeas[mi] >= 0 and trk.hmeas[mi] == trk.hmeas[mj]
-                off = abs(float(wrap_pi(trk.hx[mw, 0] - trk.hx[mi, 0])))
-                if (same or d2 < mp.d_merge**2) and off < math.radians(mp.relink_deg):
-                    near, coalesced = [True, True], True
+            if not any(near) and _coalesced(trk, main, i, j):  # deviation, common.sonar.mht
+                off = abs(float(wrap_pi(trk.hx[mw, 0] - trk.hx[main[i], 0])))
+                near = [off < math.radians(mp.relink_deg)] * 2
+                coalesced = near[0]
             if not any(near):
                 continue
             if coalesced:  # deviation: both pairings of omega and the pair's main hypothesis
-                pick = 1 if exchanged_likelier(trk, i, j, mw, mj, trk_t) else 0
+                pick = 1 if exchanged_likelier(trk, i, j, mw, int(main[j]), t) else 0
             elif all(near):
                 pick = relink_choice(trk.hx[mw, 1], trk.hx[mw, 2], tr.pre_rate[i], tr.pre_rate[j],
                                      tr.pre_amp[i], tr.pre_amp[j])
