@@ -107,6 +107,27 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     its prediction for 3 scans in a row (cross_turn 36: both tracks coasted for minutes
     beside one target's detections while the other target was 8-13 deg away): 38 -> 38
     (cross_turn 93 fixed, 43 new, RMSE cross_turn 0.63 -> 0.60, cross_slow 0.64 -> 0.61).
+  - re-link after a memory-mode episode (2026-11-26, session 13; the coalesced branch of
+    common.sonar.mht_tracks.relink on 004's memory mode, in a module bearing_relink): a
+    confirmed track's state is kept when its 004 flag rises, with its partner (the
+    mutual-nearest flagged confirmed track in bearing); a track confirmed within 10 deg of
+    a pair within d_merge of each other (coalesced) goes to the member whose entry state it
+    continues likelier (both pairings, the quiet model's F and Q, as mht_tracks.continuation),
+    which takes its state and register rows (its own rows since the entry leave it), and is
+    deleted. Only once both left the memory mode (episode closed 24 scans after both were
+    unflagged): 38 -> 38, it never fired on a failing seed (cross_slow 26 and cross_turn 36
+    keep both tracks in memory mode to the end, their grown gates take the lost target's
+    detections, so no track opens; on cross_slow 55, 66, 79, 122 no track confirms during
+    the episode). Also while the pair is flagged: 38 -> 37 (cross_slow 59 fixed: both tracks
+    on one target in memory mode, the other target's new track linked to the member that had
+    it; break runs cross_slow 2 -> 0, cross_turn 4 -> 3, none new). With, in addition, the
+    exchange of states and register rows at the end of the episode when the pair did not
+    coalesce and each track's state continues the other's entry state likelier (the
+    `crossing_order` analogue): window 24 scans 37 (it comes after the scorer saw the swap:
+    cross_slow 55 restored at t = 955 s), 6 scans and 3 scans 36 (cross_slow 55 fixed too;
+    no new swap or break run, RMSE unchanged, sonar_hold5 0 swap runs). 38 -> 36 is within
+    the noise of these counts; the pattern of cross_turn 36 / cross_slow 26 (a pair frozen in
+    memory mode beside one target, no new track) is untouched by any re-link.
 """
 
 from __future__ import annotations
