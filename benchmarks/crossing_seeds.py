@@ -103,6 +103,10 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     six-minute ambiguity whose memory-mode level drifts 5 dB before both tracks settle on
     one target; 2dpm_uneq 33 enters memory at t = 100 with 70 s old tracks whose rates
     are twice the truth (the extrapolations cross 160 s before the targets do).
+  - a 004 memory-mode track holds only the detections within 3 measurement sigma of its
+    prediction (they bar new tracks and tentative merges; farther ones open tracks), so
+    the other target's detections are not swallowed by two tracks frozen beside one
+    target: 38 -> 41 swap runs (4dpm_eq 2 and 34, 4dpm_uneq 34 new), break runs 8 -> 14.
   - memory mode left by a flagged track with no detection within 3 measurement sigma of
     its prediction for 3 scans in a row (cross_turn 36: both tracks coasted for minutes
     beside one target's detections while the other target was 8-13 deg away): 38 -> 38
