@@ -273,7 +273,9 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         counters = stats(port)
         assert counters.get("rejected", 0) == 0
         assert counters["in"] >= len(d.of("radar/gtracks"))  # and etracks, truth, sonar
-        d.session.put(f"{ROOT}/sim/truth/radar", b"\xc1 not msgpack")
+        # on a key only this test publishes: a bad sim/truth/radar (latest-only) may be
+        # coalesced behind the simulator's next truth, counted as coalesced, not rejected
+        d.session.put(f"{ROOT}/sonar/detections/a1", b"\xc1 not msgpack")
         d.session.put(f"{ROOT}/radar/etracks/b9", protocol.encode(
             {"v": protocol.VERSION, "t": 1.0, "base": "b9", "tracks": []}))  # no such base
         wait("two rejected inputs counted", lambda: stats(port).get("rejected") == 2, 30)
@@ -284,7 +286,7 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
         assert view.proc.wait(60) == 0
     assert f"pfusion view: cannot listen on 127.0.0.1:{port}" in (tmp_path / "view-busy.log").read_text()
     log = (tmp_path / "view.log").read_text()  # both logged, in the order the view took them
-    assert re.search(rf"rejected {ROOT}/sim/truth/radar \([12] so far\): <payload>: not msgpack", log)
+    assert re.search(rf"rejected {ROOT}/sonar/detections/a1 \([12] so far\): <payload>: not msgpack", log)
     assert re.search(rf"rejected {ROOT}/radar/etracks/b9 \([12] so far\): .*no base with id 'b9'", log)
 
 
