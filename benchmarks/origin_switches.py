@@ -93,15 +93,15 @@ class OriginLabels:
     def summary(self, gospa_series: list[dict[int, int | None]]) -> tuple[int, int, int]:
         """(switches by origin, GOSPA switches, of them crossings of the scoring)."""
         last: dict[int, int] = {}
-        gospa_sw = crossing = 0
+        crossing = 0
         before: dict[int, int | None] = {}
         for step, own in zip(gospa_series, self.series):
             for i, k in step.items():
                 if k is None:
                     continue
                 if i in last and last[i] != k:
-                    gospa_sw += 1
                     crossing += before.get(i) is not None and before.get(i) == own.get(i)
                 last[i] = k
             before = own
-        return count_switches(self.series).switches, gospa_sw, crossing
+        return (count_switches(self.series).switches, count_switches(gospa_series).switches,
+                crossing)

@@ -22,8 +22,6 @@ if TYPE_CHECKING:
 _FIELDS: dict[str, tuple[type, float]] = {
     "uid": (np.int64, 0), "SA": (np.int8, 0), "ZA": (np.int64, 0), "IN": (np.int64, -1),
     "k_auf": (np.int64, 0), "born": (np.int64, 0), "no_b": (np.int64, 0),
-    "pre_rate": (np.float64, 0.0), "pre_amp": (np.float64, 0.0),
-    "last_rate": (np.float64, 0.0), "last_amp": (np.float64, 0.0),
     "ever_confirmed": (np.bool_, False), "coalesced": (np.bool_, False),
     "pre_t": (np.float64, 0.0), "last_t": (np.float64, 0.0),
 }  # and the states pre_x, pre_P, last_x, last_P of TrackArrays(n)
@@ -32,13 +30,12 @@ _FIELDS: dict[str, tuple[type, float]] = {
 class TrackArrays:
     """One array per track attribute, indexed by track slot: uid (published number),
     SA (1 confirmed, 0 tentative), ZA (SPRT counter), IN (uid of the track in conflict,
-    -1 none), k_auf (cycle the conflict began), pre_rate / pre_amp (main hypothesis'
-    bearing rate and level before the conflict), last_rate / last_amp (the same, last
-    cycle), born (cycle of creation), no_b (cycles in a row without LR > B),
-    ever_confirmed; for the end of a coalesced conflict: coalesced (the pair's main
+    -1 none), k_auf (cycle the conflict began), born (cycle of creation), no_b (cycles
+    in a row without LR > B), ever_confirmed, coalesced (the conflicting pair's main
     hypotheses took one measurement or came within d_merge), pre_t, pre_x (N, n), pre_P
-    (N, n, n) (time, state and covariance of the main hypothesis before the conflict),
-    last_t, last_x, last_P (the same, last cycle)."""
+    (N, n, n) (time, state and covariance of the main hypothesis before the conflict: its
+    bearing rate and level for the re-link), last_t, last_x, last_P (the same, last
+    cycle)."""
 
     uid: np.ndarray
     SA: np.ndarray
@@ -47,10 +44,6 @@ class TrackArrays:
     k_auf: np.ndarray
     born: np.ndarray
     no_b: np.ndarray
-    pre_rate: np.ndarray
-    pre_amp: np.ndarray
-    last_rate: np.ndarray
-    last_amp: np.ndarray
     ever_confirmed: np.ndarray
     coalesced: np.ndarray
     pre_t: np.ndarray
@@ -130,7 +123,7 @@ def conflict_flags(trk: "MhtTracker", t: float) -> None:
             tr.IN[i] = -1
             if j > i and tr.coalesced[i] and main[i] >= 0 and main[j] >= 0:
                 ended.append((int(i), j))
-        elif _coalesced(trk, main, i, j):
+        elif j > i and _coalesced(trk, main, i, j):
             tr.coalesced[[i, j]] = True
     if any([crossing_order(trk, i, j, main, t) for i, j in ended]):
         main = heaviest(trk.hc, trk.ht, tr.size)
@@ -140,8 +133,6 @@ def conflict_flags(trk: "MhtTracker", t: float) -> None:
     _pair_sharing(tr, conf, meas[conf], trk.k)
     ok = main >= 0
     m = main[ok]
-    tr.last_rate[ok] = trk.hx[m, 1]
-    tr.last_amp[ok] = trk.hx[m, 2]
     tr.last_t[ok], tr.last_x[ok], tr.last_P[ok] = t, trk.hx[m], trk.hP[m]
 
 
@@ -200,7 +191,7 @@ def _pair_sharing(tr: TrackArrays, slots: np.ndarray, meas: np.ndarray, k: int) 
         if meas[a] == meas[b] and s != t and tr.IN[s] < 0 and tr.IN[t] < 0:
             tr.IN[s], tr.IN[t] = tr.uid[t], tr.uid[s]
             tr.k_auf[s] = tr.k_auf[t] = k
-            for name in ("rate", "amp", "t", "x", "P"):
+            for name in ("t", "x", "P"):
                 getattr(tr, "pre_" + name)[[s, t]] = getattr(tr, "last_" + name)[[s, t]]
 
 
@@ -299,8 +290,8 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
             if coalesced:  # deviation: both pairings of omega and the pair's main hypothesis
                 pick = 1 if exchanged_likelier(trk, i, j, mw, int(main[j]), t) else 0
             elif all(near):
-                pick = relink_choice(trk.hx[mw, 1], trk.hx[mw, 2], tr.pre_rate[i], tr.pre_rate[j],
-                                     tr.pre_amp[i], tr.pre_amp[j])
+                pick = relink_choice(trk.hx[mw, 1], trk.hx[mw, 2], tr.pre_x[i, 1], tr.pre_x[j, 1],
+                                     tr.pre_x[i, 2], tr.pre_x[j, 2])
             else:
                 pick = 0 if near[0] else 1
             s = (i, j)[pick]

@@ -203,7 +203,6 @@ def _coalesced_pair(omega_brg: float | None, mains: tuple[float, float]) -> MhtT
     tr.pre_t[:2] = 0.0
     tr.pre_x[:2] = [[1.0 - 2 * DEG, rate, 12.0, 0.0], [1.0 + 2 * DEG, -rate, 12.0, 0.0]]
     tr.pre_P[:2] = np.diag([0.2 * DEG**2, (0.1 * rate) ** 2, 1.0, 1e-4])
-    tr.pre_rate[:2] = [rate, -rate]
     trk.hx[:2, 1] = -rate  # the pair follows the falling target
     trk.hP[:2] = np.diag([0.2 * DEG**2, (0.2 * rate) ** 2, 1.0, 1e-4])
     trk.hmeas = np.array([4, 4, 7][: len(b)])
@@ -223,7 +222,7 @@ def test_relink_of_a_new_track_to_a_coalesced_pair_by_the_continuation_of_both()
 
     trk = _coalesced_pair(1.0 + 2 * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
     tr = trk.tr
-    assert relink_choice(trk.hx[2, 1], 12.0, tr.pre_rate[0], tr.pre_rate[1], 12.0, 12.0) == 1
+    assert relink_choice(trk.hx[2, 1], 12.0, tr.pre_x[0, 1], tr.pre_x[1, 1], 12.0, 12.0) == 1
     drop = relink(trk, np.array([2]), 400.0)
     assert drop.tolist() == [False, False, True]
     assert trk.ht.tolist() == [2, 1, 0] and (tr.IN[:2] == -1).all()  # track 1 goes on with omega
