@@ -12,8 +12,10 @@ last track while that track is labelled with it, else takes the one labelled wit
 that the GOSPA assignment gives it, else the lowest number labelled with it. Switches
 of that series (common.evaluation.metrics.count_switches) are association errors:
 a track fed by another aircraft's elementary tracks, or replaced by a new one.
-A GOSPA switch at which the truth keeps its track by origin (the same, on both scans)
-is a crossing of the scoring: the truth's correctly fed track scored on another truth.
+A switch of the scoring's series (benchmarks/dense_scale.py passes the joint trajectory
+GOSPA assignment, common.evaluation.trajectory_gospa) at which the truth keeps its track
+by origin (the same, on both scans) is a crossing of the scoring: the truth's correctly
+fed track scored on another truth.
 """
 
 from __future__ import annotations
@@ -91,7 +93,7 @@ class OriginLabels:
         self.series.append(step)
 
     def summary(self, gospa_series: list[dict[int, int | None]]) -> tuple[int, int, int]:
-        """(switches by origin, GOSPA switches, of them crossings of the scoring)."""
+        """(switches by origin, switches of the scoring's series, of them crossings)."""
         last: dict[int, int] = {}
         crossing = 0
         before: dict[int, int | None] = {}

