@@ -95,14 +95,16 @@ class TrackTable:
             col[: old.shape[0]] = old
             setattr(self, name, col)
 
-    def add(self, k: int) -> np.ndarray:
-        """Open k tracks in the lowest free slots (smallest free numbers), reset to
-        TENTATIVE with zero score/counters, t_last = nan, x = 0, P = 0 (caller fills).
-        Returns their slot indices (ascending)."""
-        free = np.flatnonzero(~self.alive)
+    def add(self, k: int, avoid: ArrayLike = ()) -> np.ndarray:
+        """Open k tracks in the lowest free slots (smallest free numbers) but the slots
+        in `avoid` (numbers held by the caller), reset to TENTATIVE with zero
+        score/counters, t_last = nan, x = 0, P = 0 (caller fills). Returns their slot
+        indices (ascending)."""
+        held = np.asarray(avoid, dtype=np.intp)
+        free = np.setdiff1d(np.flatnonzero(~self.alive), held)
         if free.size < k:
             self._grow(self.capacity + k - free.size)
-            free = np.flatnonzero(~self.alive)
+            free = np.setdiff1d(np.flatnonzero(~self.alive), held)
         idx = free[:k]
         for name, (_, _, fill) in self._specs.items():
             getattr(self, name)[idx] = fill

@@ -12,12 +12,10 @@ so the output depends neither on the arrival order of one cycle's messages nor o
 the bases' streams interleave, as long as no base is declared stale.
 
 Deviation (stated): 001's rule "every base reported t, or any base reported a later
-time" (and a tolerance in message time) assumes that all bases run in lock step with
-real time. When the chain runs faster than real time (replay, simulation) the per-base
-processes drift apart by tens of scans; a message-time rule then ran cycles without a
-base that was merely slow, rejected that base's report as late, and made the output
-depend on process timing (measured on crossing.toml: lags of up to 29 scans between
-bases at the fusion's input, different tracks from run to run).
+time" assumes bases in lock step with real time; faster than real time (replay) the
+per-base processes drift apart by tens of scans (29 measured on crossing.toml), and a
+message-time rule ran cycles without a base that was merely slow, rejected its report
+as late and made the output depend on process timing.
 
 Cycle at t (001 figure 7):
   predict every component of every global track to t ([55]-[56], IMM mixing);
@@ -34,25 +32,23 @@ Cycle at t (001 figure 7):
     b4} of one target made two tracks: 193 tracks for 100 targets); step 5 extends
     the new tracks through module 63;
   seed 004: ambiguity of the predicted plan positions (x, y) (CrossingManager),
-    alpha as gain; the altitude is left out (stated): it is resolved slowly by the
-    altitude bands, whose spread made every pair of tracks of dense.toml ambiguous,
-    kept them in memory mode and so never resolved (two aircraft at one plan position
-    are told apart by the elementary tracks' own crossing management); alpha scales the
-    gain of confirmed tracks only (issue 14, dense300.toml): a new track's wide
-    altitude mixture made it ambiguous with any neighbour, alpha = 0 froze it for 004's
-    maximum duration (60 s) and it was never located, a false track holding a
-    target's elementary tracks;
+    alpha as gain; the altitude is left out (stated): the bands' spread made every
+    pair of tracks of dense.toml ambiguous and kept them in memory mode (two aircraft
+    at one plan position are told apart by the elementary tracks' own crossing
+    management); alpha scales the gain of confirmed tracks only (dense300.toml: a new
+    track's wide altitude mixture made it ambiguous with any neighbour, alpha = 0
+    froze it for 60 s, a false track holding a target's elementary tracks);
   module 64 + 65: per altitude band, localisation from the contributing updated
     elementary tracks (one whose v_b the others contradict is dissociated), then the
     EKF update [49]-[50] of each component; weights, pruning, merging (global_filter);
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
-    `max_coast` cycles; numbers are stable and recycled (common.core.track_table). A track
-    whose contributors were reported but gave no measurement (e.g. crossing.toml t = 52,
-    59) is predicted only but keeps its status, unless none was updated at its base for
-    `coast_cycles` cycles (common.radar.global_status).
-    Duplicates (two tracks on disjoint bases, one target) are merged:
-    common.radar.global_merge.
+    `max_coast` cycles; numbers are stable and recycled (common.core.track_table), a
+    removed confirmed track's number held for the track that takes its elementary
+    tracks (common.radar.global_succession). A track whose contributors were reported
+    but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
+    its status, unless none was updated at its base for `coast_cycles` cycles
+    (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
 Decorrelation (equivalent measurements), module 64 per band and the mixture state:
 common.radar.global_filter. Module 63 ([48]) and module 62 use the elementary tracks'
 estimates (common.radar.global_assoc says why).
@@ -63,14 +59,10 @@ the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood 
 the scan's measurement [49]; a new track starts from the chain's stationary
 probabilities. Association (63), crossing (004) and output use the combined
 estimate. With one fixed Q the filter could not be both consistent on a straight
-target and follow a 2 deg/s turn (two_targets.toml): a Q sized for the turn made the
-straight target's covariance far too large (mean NEES 1.88), and the adaptive q used
-before (continuous noise level adjustment) reacted after the gate [48] had already
-dissociated the bases at the turn's onset (a new track took over, NEES bursts of 100-
-450).
-Seed path (`FusionParams.filter = "seed"`, issue 14): 001's single EKF, to measure the
-departures above against 001 as written (common.radar.global_filter says what switches;
-benchmarks/seed_vs_mixture.py measures both paths side by side).
+target and follow a 2 deg/s turn (two_targets.toml: a Q sized for the turn gave a
+straight target's mean NEES 1.88; an adaptive q reacted after the gate [48] had
+dissociated the bases at the turn's onset, NEES bursts of 100-450).
+Seed path (`FusionParams.filter = "seed"`): 001's single EKF (benchmarks/seed_vs_mixture.py).
 """
 
 from __future__ import annotations
@@ -93,6 +85,7 @@ from common.radar.global_filter import MixtureFilter
 from common.radar.global_merge import merge_tracks
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_report import GlobalTracks, etrack_set
+from common.radar.global_succession import Succession
 from common.radar.global_status import quiet_cycles, reported_status
 from common.core.track_table import TrackTable
 
@@ -189,6 +182,8 @@ class GlobalFusion:
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
                                           "mu": ((K,), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
+        self.succession = Succession(self.p.max_coast)  # common.radar.global_succession
+        self.confirmed_now = np.zeros(0, dtype=np.intp)
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # global_assoc.ambiguous_members
         self.az_gate = np.radians(self.p.az_gate_deg)
@@ -327,7 +322,7 @@ class GlobalFusion:
         n_ext = (ext >= 0).sum(axis=1)
         win = select(np.concatenate([cand.rows, ext], axis=1), cand.cost - 1e6 * n_ext)
         tab = self.table
-        slots = tab.add(win.size)
+        slots = tab.add(win.size, avoid=self.succession.held())
         used = cand.rows[win]
         if seed:  # one component: the state and covariance [44]-[46] of the candidate
             xb, Pb, wb = cand.x[win][:, None], cand.P[win][:, None], np.ones((win.size, 1))
@@ -374,7 +369,9 @@ class GlobalFusion:
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
         tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
-        tab.confirmed[live] |= tab.n_good[live] >= self.p.confirm_cycles
+        was = tab.confirmed[live]
+        tab.confirmed[live] = was | (tab.n_good[live] >= self.p.confirm_cycles)
+        self.confirmed_now = live[tab.confirmed[live] & ~was]
         tab.n_quiet[live] = quiet_cycles(tab.n_quiet[live], np.append(E.updated, False)[r].any(1))
         tab.status[live] = reported_status(tab.confirmed[live], (r >= 0).any(1), np.isin(live, new),
                                            tab.n_quiet[live], self.p.coast_cycles)  # module 61
@@ -392,7 +389,10 @@ class GlobalFusion:
         dead = np.union1d(dead, gone)
         if dead.size:
             self.crossing.forget(tab.id[np.union1d(dead, renamed)])
+            self.succession.vacate(tab, dead)
             tab.remove(dead)
+        now = self.confirmed_now[tab.alive[self.confirmed_now]]
+        self.crossing.forget(self.succession.inherit(tab, now))
         self.t_last = t
         s = tab.active_indices()
         return GlobalTracks(float(t), tuple(self.base_ids), tab.id[s].copy(), tab.status[s].copy(),
