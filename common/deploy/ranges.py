@@ -79,7 +79,6 @@ RANGES: dict[str, dict[str, Range]] = {
         "sigma_gamma": positive("m/s^3 (jerk sigma)"), "sigma_omega": positive("rad/s^2"),
         "gate_prob": PROB_OPEN, "delta_vb": positive("m/s"),
         "sigma_gamma_init": positive("m/s^2"), "sigma_omega_init": positive("rad/s"),
-        "sigma_gamma_manoeuvre": non_negative("m/s^3 (jerk sigma)"),
         "score_per_channel": non_negative("score"), "ambiguity_penalty": non_negative("score"),
         "miss_penalty": non_negative("score"), "score_max": positive("score"),
         "confirm_score": SCORE, "score_delete": SCORE,

@@ -5,15 +5,6 @@ Per scan of fused plots at time t (module 41 sequencing):
   2. module 43 gating d = i' S^-1 i (001 [8]-[11]), S = H P~ H' + R_j per pair, gate
      gamma = chi-square(3) quantile at `gate_prob`, nearest neighbour 001 [12]
      (`common.core.assignment.nearest_neighbour`, which also flags ambiguous decisions);
-  2b. manoeuvre gate (complement, stated): a confirmed or coasting track without a plot
-     gates the plots left over once more, its prediction covariance taken with the
-     jerk sigma_gamma_manoeuvre in Q [20] instead of sigma_gamma, nearest neighbour
-     again, and is updated from that covariance. Why: an aircraft that starts a 3 deg/s
-     turn at 300 m/s changes its bistatic acceleration by up to 2 x 16 m/s^2 within one
-     scan, its v_b leaves the [8] gate of the white-jerk model (sigma_gamma 5 m/s^3) and
-     every base dropped its elementary track in the same scan (dense1000.toml aircraft
-     905 at t = 54: the global track was lost and the aircraft renumbered). The default
-     20 m/s^3 is a 2 g change of acceleration within one scan at one sigma;
   3. crossing management (seed 004, `common.core.crossing`) on the predicted (r_b, theta)
      of confirmed and coasting tracks: the ambiguity flag is published, alpha is the
      gain weight of the update;
@@ -96,9 +87,6 @@ class ElementaryParams:
     gate_prob: probability of correct association defining the chi-square(3) gate.
     delta_vb: Delta_vb, the wide v_b window of the compatibility test [15].
     sigma_gamma_init, sigma_omega_init: the constants of the initial covariance [17].
-    sigma_gamma_manoeuvre: jerk sigma of the manoeuvre gate (module docstring, step 2b):
-        a confirmed track that gated no plot tries the left-over plots once more with
-        this sigma_gamma in Q [20]; 0 switches the second gate off.
     score_per_channel, ambiguity_penalty, miss_penalty, score_max, confirm_score,
     score_delete, max_coast, max_coast_tentative: module 41 rules (module docstring).
     """
@@ -109,7 +97,6 @@ class ElementaryParams:
     delta_vb: float = 50.0
     sigma_gamma_init: float = 10.0
     sigma_omega_init: float = 0.02
-    sigma_gamma_manoeuvre: float = 20.0
     score_per_channel: float = 1.0
     ambiguity_penalty: float = 0.5
     miss_penalty: float = 1.0
@@ -205,7 +192,6 @@ class ElementaryTracker:
         cost = np.full((idx.size, len(plots)), np.inf)
         cost[ti, pj] = d
         rows, cols, nn_amb = nearest_neighbour(cost)  # 001 [12]
-        rows, cols = self._manoeuvre_gate(idx, t, z_pred, P, plots, rows, cols)
         alpha, amb = self._crossing(t, idx, x, P, plots, rows, cols)
 
         R = np.zeros((rows.size, 3, 3))
@@ -240,33 +226,6 @@ class ElementaryTracker:
                               bistatic_Q(T, p.sigma_gamma, p.sigma_omega))
         x[:, 3] = wrap_2pi(x[:, 3])
         return x, P
-
-    def _manoeuvre_gate(self, idx: np.ndarray, t: float, z_pred: np.ndarray, P: np.ndarray,
-                        plots: Plots, rows: np.ndarray, cols: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
-        """Step 2b (module docstring): the confirmed and coasting tracks without a plot
-        against the plots left over, with Q [20] of sigma_gamma_manoeuvre; P of the tracks
-        that take a plot is replaced in place. Returns the pairs (rows, cols) extended."""
-        p = self.params
-        if p.sigma_gamma_manoeuvre <= p.sigma_gamma or len(plots) == 0:
-            return rows, cols
-        lone = np.ones(idx.size, dtype=bool)
-        lone[rows] = False
-        cand = np.flatnonzero(lone & (self.table.status[idx] != Status.TENTATIVE))
-        free = np.ones(len(plots), dtype=bool)
-        free[cols] = False
-        left = np.flatnonzero(free)
-        if cand.size == 0 or left.size == 0:
-            return rows, cols
-        T = t - self.table.t_last[idx[cand]]
-        extra = np.sqrt(p.sigma_gamma_manoeuvre**2 - p.sigma_gamma**2)  # Q [20] is linear in sigma^2
-        Pm = P[cand] + bistatic_Q(T, extra, 0.0)
-        ti, pj, d = gate_pairs(z_pred[cand], H @ Pm @ H.T, plots.take(left), self.gamma)
-        cost = np.full((cand.size, left.size), np.inf)
-        cost[ti, pj] = d
-        r2, c2, _ = nearest_neighbour(cost)
-        P[cand[r2]] = Pm[r2]
-        return np.concatenate([rows, cand[r2]]), np.concatenate([cols, left[c2]])
 
     def _crossing(self, t: float, idx: np.ndarray, x: np.ndarray, P: np.ndarray,
                   plots: Plots, rows: np.ndarray, cols: np.ndarray

@@ -230,33 +230,3 @@ def test_crossing_candidates_match_brute_force() -> None:
     close = d_rb & (d_az <= 8 * (s[:, None, 1] + s[None, :, 1]))
     np.fill_diagonal(close, False)
     assert neighbours(z, s, 8.0).tolist() == close.any(axis=1).tolist()
-
-
-def _accelerating_run(sigma_gamma_manoeuvre: float) -> list:
-    """A confirmed track at constant v_b for 10 scans, then a step of 40 m/s^2 in the
-    bistatic acceleration (an aircraft starting a 2 g turn, seen along both legs): the
-    reports of every scan."""
-    trk = ElementaryTracker(ElementaryParams(sigma_gamma_manoeuvre=sigma_gamma_manoeuvre))
-    reps = []
-    r, v = 30000.0, -50.0
-    for k in range(16):
-        a = 40.0 if k >= 10 else 0.0
-        r, v = r + v + 0.5 * a, v + a
-        reps.append(trk.step(float(k), plots([(r, v, 1.0 + 1e-4 * k)], 3)))
-    return reps
-
-
-def test_manoeuvre_gate_keeps_the_track_through_an_acceleration_step() -> None:
-    """Step 2b: the plot after the step is 40 m/s off in v_b, outside the gate [8] of the
-    white-jerk model (sigma_gamma 5) but inside that of sigma_gamma_manoeuvre 20: the
-    confirmed track takes it and keeps its number; without the second gate it coasts
-    and the plot opens a new track."""
-    on = _accelerating_run(20.0)
-    off = _accelerating_run(0.0)
-    first = int(on[9].id[0])
-    assert on[9].status.tolist() == [Status.CONFIRMED] and off[9].id.tolist() == [first]
-    assert all(rep.updated[rep.id == first].tolist() == [True] for rep in on[10:])
-    assert on[-1].id.tolist() == [first]
-    assert abs(on[-1].x[0, 1] - (-50.0 + 40.0 * 6)) < 10.0
-    assert off[10].updated[off[10].id == first].tolist() == [False]
-    assert first not in off[-1].id.tolist()
