@@ -32,6 +32,7 @@ class Deployment:
         self.session = open_session(ZenohConfig([self.endpoint], [], ROOT))
         self.inbox = Inbox()
         self.messages: list[tuple[str, dict[str, Any]]] = []
+        self.by_key: dict[str, list[dict[str, Any]]] = {}  # the same messages per key, for `of`
         self.losses = LossCount(logging.getLogger("collector"))
         self._subs: list[Any] = []
         self._token: Any = None
@@ -126,6 +127,7 @@ class Deployment:
             kind = kind_of(env.key, ROOT)
             msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
             self.messages.append((env.key, msg))
+            self.by_key.setdefault(env.key, []).append(msg)
 
     def wait_for(self, predicate: Callable[[], bool], timeout: float = 60.0) -> None:
         """Drain until ``predicate()`` holds (e.g. the last scan's tracks arrived)."""
@@ -139,6 +141,6 @@ class Deployment:
             time.sleep(0.05)
 
     def of(self, key_suffix: str) -> list[dict[str, Any]]:
-        """Decoded messages received on root/key_suffix, in arrival order."""
-        full = f"{ROOT}/{key_suffix}"
-        return [m for k, m in self.messages if k == full]
+        """Decoded messages received on root/key_suffix, in arrival order (a copy of the
+        per-key list: polled by `wait_for` predicates, it does not rescan every message)."""
+        return list(self.by_key.get(f"{ROOT}/{key_suffix}", ()))
