@@ -41,6 +41,19 @@ same seeds):
   dense300     mixture      1     300      0.5     0.2    0.67    3.00       0.92    3.21      30.1
   dense300     seed         1     300      7.0     2.8   16.67   31.00       1.05   16.15      27.5
 
+Measured again 2026-11-26 (session 12; switches and breaks now on the trajectory GOSPA
+assignment minimised over the run, common.evaluation.trajectory_gospa, and the number
+succession of common.radar.global_succession in both paths; seeds as above, dense300
+not run):
+
+  scene        filter   seeds targets   missed   false  switch  breaks RMSE/PCRLB    NEES    fusion
+  two_targets  mixture      3       2      0.0     0.0    0.00    0.00       0.78    1.78       4.1
+  two_targets  seed         3       2     16.9     5.7   16.67   33.33       1.19    5.47       3.9
+  crossing     mixture      3       2      0.0     0.0    0.00    0.00       0.79    2.09       4.4
+  crossing     seed         3       2     13.5    13.5    0.00    0.00       1.35   42.25       3.7
+  dense        mixture      1     120      0.5     0.2    0.00    1.67       0.92    3.08      15.5
+  dense        seed         1     120     11.3     5.4   12.50   32.50       1.17   19.14      15.6
+
 The seed path is still worse in every quality column; the costs are of a faster machine.
 The mixture rows of dense and dense300 are those of benchmarks/dense_scale.py (same
 chain, same seed). What the seed path does (tests/radar/test_global_seed.py, and
