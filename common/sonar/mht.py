@@ -49,8 +49,8 @@ Deviations (stated):
   conflict (k_Auf - 1, quiet model) it continues likelier, the pair's main hypothesis on
   the other (both pairings, `exchanged_likelier`: the seed's sign of omega's young rate
   chose wrong); if they only took one measurement (000's interpretation (1)), they hold
-  both targets and omega, a duplicate, is deleted. A conflict also ends when P_u of the
-  pair falls below 1e-3 (the seed: by the re-link only); a pair coalesced in it (one
+  both targets and omega inside their gate is a duplicate, deleted. A conflict ends also
+  when the pair's P_u < 1e-3 (the seed: by the re-link only); a pair coalesced in it (one
   measurement or d_merge) then takes the likelier order (`crossing_order`).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
   of the main hypothesis of a confirmed or an older track does not pass the test this

@@ -147,6 +147,16 @@ def _coalesced(trk: "MhtTracker", main: np.ndarray, i: int, j: int) -> bool:
     return _merged(trk, mi, mj)
 
 
+def _duplicate(trk: "MhtTracker", w: int, a: int, b: int) -> bool:
+    """A new track's main hypothesis w beside a conflicting pair's main hypotheses a, b
+    that are not within d_merge (`_merged`: the pair holds two targets, unresolved) and
+    not resolved from them (its bearing inside the gate lambda of a or b, in the sigma of
+    the bearing difference): a duplicate of one of the pair's targets."""
+    d = np.abs(wrap_pi(trk.hx[w, 0] - trk.hx[[a, b], 0]))
+    inside = d < trk.mp.gate * np.sqrt(trk.hP[w, 0, 0] + trk.hP[[a, b], 0, 0])
+    return bool(inside.any()) and not _merged(trk, a, b)
+
+
 def _merged(trk: "MhtTracker", a: int, b: int) -> bool:
     """Hypotheses a and b closer than d_merge (000 d^2 < d_merge^2 over the whole state:
     bearing, bearing rate, level and its rate)."""
@@ -271,8 +281,8 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
     before the conflict omega continues likelier (`exchanged_likelier`) if their main
     hypotheses are closer than d_merge (`_merged`: both follow one target, omega is the
     other); if they only took one measurement (000's unresolved interpretation (1) of two
-    targets with distinct states), the pair holds both targets and omega, a duplicate, is
-    deleted, the pair untouched. Returns the mask of tracks to delete."""
+    targets with distinct states), the pair holds both targets and omega inside their gate
+    (`_duplicate`) is deleted, the pair untouched. Returns the mask of tracks to delete."""
     tr, mp = trk.tr, trk.mp
     drop = np.zeros(tr.size, dtype=bool)
     if newly.size == 0:
@@ -296,7 +306,7 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
                 coalesced = near[0]
             if not any(near):
                 continue
-            if coalesced and not _merged(trk, int(main[i]), int(main[j])):
+            if coalesced and _duplicate(trk, mw, int(main[i]), int(main[j])):
                 drop[w] = True  # deviation: the pair holds both targets, omega is a duplicate
                 continue
             if coalesced:  # deviation: both pairings of omega and the pair's main hypothesis
