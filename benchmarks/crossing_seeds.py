@@ -61,7 +61,10 @@ a new track inside the gate of a pair whose main hypotheses took one measurement
 not within d_merge is deleted as a duplicate (`_duplicate`: the pair holds both targets;
 a new track resolved from such a pair is re-linked as before, see cross_slow 268 below):
 seeds 1-160, 0 swap runs in the 1600 crossing runs and on sonar_hold5; the same six break
-runs, false tracks and RMSE per scene as before (to 0.01).
+runs, false tracks and RMSE per scene as before (to 0.01). Seeds 161-320 (not looked at
+before): swap runs 6 -> 2 (cross_slow 239, 243, 261, 307 fixed; 4dpm_eq 267 and 4dpm_uneq
+169 left, not traced), sonar_hold5 0 -> 0; break runs the same four before and after
+(cross_slow 198, 208, 252, hold5 281), false tracks and RMSE per scene unchanged.
 Changes tried against that table (none kept; swap runs over seeds 1-160 unless stated):
   - exit rule also drops the pair GNN gave the track whose prediction is nearest to the
     vetoed detection, when its own detection is farther (the track coasts the scan):
