@@ -40,18 +40,18 @@ Deviations (stated):
   track, and a duplicate of the target until the SPRT removed it) and shares the
   register of its track up to the split.
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
-  implemented as track i continuing with omega's hypotheses (its number and register
-  are kept; its own hypotheses, which followed the other target, are dropped) and
-  omega removed. The seed re-links only when omega is within d_Auf of a hypothesis of
-  i or j; when i and j have coalesced on one target (their main hypotheses took the same
-  measurement or are closer than d_merge: both followed one target out of a slow
-  crossing), omega, the lost target's new track, is far from both: it is re-linked when
-  within relink_deg of them, to the one whose state from before the conflict (k_Auf - 1,
-  predicted by the quiet model) it continues likelier, the pair's main hypothesis going on
-  the other (both pairings; the seed's sign of omega's rate, a young track's estimate,
-  chose wrong: common.sonar.mht_tracks `exchanged_likelier`). A conflict also ends when
-  P_u of the pair's main hypotheses falls below 1e-3 (the seed ends it by the re-link
-  only); a pair coalesced in it then takes the likelier order (`crossing_order`).
+  implemented as track i continuing with omega's hypotheses and state of this cycle (its
+  number and register kept, its own hypotheses dropped) and omega removed. The seed
+  re-links only when omega is within d_Auf of a hypothesis of i or j; when i and j have
+  coalesced on one target (main hypotheses closer than d_merge: both followed one target
+  out of a slow crossing), omega, the lost target's new track, is far from both: it is
+  re-linked when within relink_deg of them, to the one whose state from before the
+  conflict (k_Auf - 1, quiet model) it continues likelier, the pair's main hypothesis on
+  the other (both pairings, `exchanged_likelier`: the seed's sign of omega's young rate
+  chose wrong); if they only took one measurement (000's interpretation (1)), they hold
+  both targets and omega inside their gate is a duplicate, deleted. A conflict ends also
+  when the pair's P_u < 1e-3 (the seed: by the re-link only); a pair coalesced in it (one
+  measurement or d_merge) then takes the likelier order (`crossing_order`).
 - Confirmation evidence: a tentative track whose main hypothesis took the measurement
   of the main hypothesis of a confirmed or an older track does not pass the test this
   cycle (its LR counts as at most B). Without it a track born on clutter next to a

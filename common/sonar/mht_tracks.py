@@ -144,7 +144,23 @@ def _coalesced(trk: "MhtTracker", main: np.ndarray, i: int, j: int) -> bool:
         return False
     if trk.hmeas[mi] >= 0 and trk.hmeas[mi] == trk.hmeas[mj]:
         return True
-    return bool(pair_distance2(trk.hx[[mi]], trk.hP[[mi]], trk.hx[[mj]], trk.hP[[mj]])[0] < trk.mp.d_merge**2)
+    return _merged(trk, mi, mj)
+
+
+def _duplicate(trk: "MhtTracker", w: int, a: int, b: int) -> bool:
+    """A new track's main hypothesis w beside a conflicting pair's main hypotheses a, b
+    that are not within d_merge (`_merged`: the pair holds two targets, unresolved) and
+    not resolved from them (its bearing inside the gate lambda of a or b, in the sigma of
+    the bearing difference): a duplicate of one of the pair's targets."""
+    d = np.abs(wrap_pi(trk.hx[w, 0] - trk.hx[[a, b], 0]))
+    inside = d < trk.mp.gate * np.sqrt(trk.hP[w, 0, 0] + trk.hP[[a, b], 0, 0])
+    return bool(inside.any()) and not _merged(trk, a, b)
+
+
+def _merged(trk: "MhtTracker", a: int, b: int) -> bool:
+    """Hypotheses a and b closer than d_merge (000 d^2 < d_merge^2 over the whole state:
+    bearing, bearing rate, level and its rate)."""
+    return bool(pair_distance2(trk.hx[[a]], trk.hP[[a]], trk.hx[[b]], trk.hP[[b]])[0] < trk.mp.d_merge**2)
 
 
 def continuation(trk: "MhtTracker", s: int, x: np.ndarray, P: np.ndarray, t: float) -> float:
@@ -262,8 +278,11 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
     hypothesis of i or j is linked to that track's past (by the bearing-rate sign, then
     the level from before the conflict, when near both); when i and j have coalesced
     (`_coalesced`) and omega is within relink_deg of them, to the one whose state from
-    before the conflict omega continues likelier (`exchanged_likelier`). Returns the
-    mask of tracks to delete."""
+    before the conflict omega continues likelier (`exchanged_likelier`) if their main
+    hypotheses are closer than d_merge (`_merged`: both follow one target, omega is the
+    other); if they only took one measurement (000's unresolved interpretation (1) of two
+    targets with distinct states), the pair holds both targets and omega inside their gate
+    (`_duplicate`) is deleted, the pair untouched. Returns the mask of tracks to delete."""
     tr, mp = trk.tr, trk.mp
     drop = np.zeros(tr.size, dtype=bool)
     if newly.size == 0:
@@ -287,6 +306,9 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
                 coalesced = near[0]
             if not any(near):
                 continue
+            if coalesced and _duplicate(trk, mw, int(main[i]), int(main[j])):
+                drop[w] = True  # deviation: the pair holds both targets, omega is a duplicate
+                continue
             if coalesced:  # deviation: both pairings of omega and the pair's main hypothesis
                 pick = 1 if exchanged_likelier(trk, i, j, mw, int(main[j]), t) else 0
             elif all(near):
@@ -298,6 +320,16 @@ def relink(trk: "MhtTracker", newly: np.ndarray, t: float) -> np.ndarray:
             own, theirs = trk.ht == s, trk.ht == w
             trk.ht[own], trk.ht[theirs] = w, s  # s continues with omega's hypotheses
             drop[w] = True
-            tr.IN[i] = tr.IN[j] = -1
+            _end_by_relink(tr, i, j, s, w)
             break
     return drop
+
+
+def _end_by_relink(tr: TrackArrays, i: int, j: int, s: int, w: int) -> None:
+    """000 end of the conflict of (i, j) by the re-link of omega (slot w) to track s: the
+    conflict memory goes with it (IN, coalesced), and s's state of this cycle, from which
+    a conflict starting next cycle takes its state from before the conflict, is omega's."""
+    tr.IN[[i, j]] = -1
+    tr.coalesced[[i, j]] = False
+    for name in ("t", "x", "P"):
+        getattr(tr, "last_" + name)[s] = getattr(tr, "last_" + name)[w]

@@ -228,6 +228,45 @@ def test_relink_of_a_new_track_to_a_coalesced_pair_by_the_continuation_of_both()
     assert trk.ht.tolist() == [2, 1, 0] and (tr.IN[:2] == -1).all()  # track 1 goes on with omega
 
 
+@pytest.mark.parametrize("omega_deg, duplicate", [(1.5, True), (2.0, False)])
+def test_a_new_track_beside_a_pair_that_holds_both_targets_is_a_duplicate(omega_deg, duplicate):
+    """The pair took one measurement (000's unresolved interpretation (1)) but its main
+    hypotheses keep distinct bearing rates (farther than d_merge): it still holds both
+    targets, so omega, confirmed beside it inside its gate (3.2 sigma in bearing), is no
+    target it lost: omega is deleted, the pair keeps its hypotheses and its conflict
+    (sonar_hold5 seed 106: a clutter-born track at -17 deg/min re-linked to such a pair
+    took the rising track's place). Omega resolved from the pair (3.7 sigma, outside the
+    gate) is a target it lost and is re-linked (cross_slow seed 268: one of the pair, pulled
+    onto the other's target, kept a distinct young rate)."""
+    from common.sonar.mht_tracks import relink
+
+    trk = _coalesced_pair(1.0 + omega_deg * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
+    tr = trk.tr
+    trk.hx[0, 1] = tr.pre_x[0, 1]  # track 1 still rising, track 2 falling
+    drop = relink(trk, np.array([2]), 400.0)
+    assert drop.tolist() == [False, False, True]
+    assert (trk.ht.tolist() == [0, 1, 2]) is duplicate and bool((tr.IN[:2] >= 0).all()) is duplicate
+
+
+def test_a_conflict_ended_by_a_relink_leaves_no_memory_to_the_next():
+    """The re-link ends the conflict with its memory: the pair is no longer coalesced, and
+    the re-linked track's state of this cycle is omega's, so a conflict that starts again
+    next cycle takes omega's state as the one from before it (cross_slow seed 150: the
+    dropped state, on the other target, was taken and the next end of conflict swapped)."""
+    from common.sonar.mht_tracks import _pair_sharing, relink
+
+    trk = _coalesced_pair(1.0 + 2 * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
+    tr = trk.tr
+    tr.coalesced[:2] = True
+    tr.last_t[:], tr.last_x[:], tr.last_P[:] = 400.0, trk.hx, trk.hP
+    omega = trk.hx[2].copy()
+    relink(trk, np.array([2]), 400.0)
+    assert not tr.coalesced[:2].any()
+    np.testing.assert_array_equal(tr.last_x[0], omega)
+    _pair_sharing(tr, np.array([0, 1]), np.array([3, 3]), 81)
+    np.testing.assert_array_equal(tr.pre_x[0], omega)
+
+
 @pytest.mark.parametrize("mains, exchanged", [((1.0 - 2 * DEG, 1.0 + 2 * DEG), True),
                                               ((1.0 + 2 * DEG, 1.0 - 2 * DEG), False)])
 def test_a_coalesced_pair_leaving_its_conflict_takes_the_order_it_had_before(mains, exchanged):
