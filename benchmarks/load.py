@@ -47,6 +47,9 @@ clean-up of common.radar.global_merge): 2x, 4x and 6x kept up (last gtracks 0.15
 after its plots), 0 lost, 0 missed, 0 rejected; end to end p50 / p99 138 / 2740 ms,
 136 / 3633 ms, 986 / 3830 ms (the p99: the cycles that initialise 1000 tracks; global
 fusion handling p50 / p99 5 / 133 ms at 2x).
+dense1000 at 2x again on 2026-11-26 (session 12: number succession in global fusion;
+idle machine): kept up (last gtracks 0.12 s after its plots), 0 lost, 0 missed, 0
+rejected; end to end p50 / p99 147 / 3111 ms; global fusion handling p50 / p99 5.3 / 148 ms.
 
 Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N] [--scene NAME]
 """
