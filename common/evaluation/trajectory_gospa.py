@@ -60,23 +60,16 @@ def joint_assignment(frames: Sequence[Frame], c: float, gamma: float, p: float =
     cols: list[int] = []
     vals: list[float] = []
     bound: list[float] = []
-
-    def one_each(groups: dict[tuple[int, int], list[int]]) -> None:
-        """sum of W <= 1 over each group of variables (a truth's or a track's, one step)."""
-        for members in groups.values():
-            if len(members) > 1:
-                rows.extend([len(bound)] * len(members))
-                cols.extend(members)
-                vals.extend([1.0] * len(members))
-                bound.append(1.0)
-
-    by_truth: dict[tuple[int, int], list[int]] = {}
-    by_track: dict[tuple[int, int], list[int]] = {}
+    groups: dict[tuple[str, int, int], list[int]] = {}  # a truth's or a track's W at one step
     for n, (k, i, j) in enumerate(keys):
-        by_truth.setdefault((k, i), []).append(n)
-        by_track.setdefault((k, j), []).append(n)
-    one_each(by_truth)
-    one_each(by_track)
+        groups.setdefault(("truth", k, i), []).append(n)
+        groups.setdefault(("track", k, j), []).append(n)
+    for members in groups.values():  # sum of W <= 1 over each group
+        if len(members) > 1:
+            rows += [len(bound)] * len(members)
+            cols += members
+            vals += [1.0] * len(members)
+            bound.append(1.0)
     present = [set(np.asarray(f[0]).tolist()) for f in frames]
     n_e = 0
     for n, (k, i, j) in enumerate(keys):  # W^k_ij against W^(k+1)_ij, truth i at both steps

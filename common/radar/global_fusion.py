@@ -49,9 +49,8 @@ Cycle at t (001 figure 7):
     but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
     its status, unless none was updated at its base for `coast_cycles` cycles
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
-Decorrelation (equivalent measurements), module 64 per band and the mixture state:
-common.radar.global_filter. Module 63 ([48]) and module 62 use the elementary tracks'
-estimates (common.radar.global_assoc says why).
+Decorrelation, module 64 per band and the mixture: common.radar.global_filter. Modules
+63 ([48]) and 62 use the elementary tracks' estimates (common.radar.global_assoc: why).
 Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
 model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
 (q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
@@ -61,8 +60,8 @@ probabilities. Association (63), crossing (004) and output use the combined
 estimate. With one fixed Q the filter could not be both consistent on a straight
 target and follow a 2 deg/s turn (two_targets.toml: a Q sized for the turn gave a
 straight target's mean NEES 1.88; an adaptive q reacted after the gate [48] had
-dissociated the bases at the turn's onset, NEES bursts of 100-450).
-Seed path (`FusionParams.filter = "seed"`): 001's single EKF (benchmarks/seed_vs_mixture.py).
+dissociated the bases at the turn's onset, NEES bursts of 100-450). Seed path
+(`FusionParams.filter = "seed"`): 001's single EKF (benchmarks/seed_vs_mixture.py).
 """
 
 from __future__ import annotations
@@ -183,7 +182,6 @@ class GlobalFusion:
                                           "mu": ((K,), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.succession = Succession(self.p.max_coast)  # common.radar.global_succession
-        self.confirmed_now = np.zeros(0, dtype=np.intp)
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # global_assoc.ambiguous_members
         self.az_gate = np.radians(self.p.az_gate_deg)
@@ -241,8 +239,8 @@ class GlobalFusion:
         now = tab.active_indices()
         withheld = ambiguous_members(c, xm, Pm, x, P, row, now[~np.isin(now, new)], E, self.tx,
                                      self.rx, self.az_gate, self.gamma_max, self.swap_gate)
-        self._update(t, now, new, x, P, (xm, Pm, c), E, row, withheld)
-        return self._manage(t, E, row)
+        confirmed_now = self._update(t, now, new, x, P, (xm, Pm, c), E, row, withheld)
+        return self._manage(t, E, row, confirmed_now)
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
                  E: ETrackSet, reported: np.ndarray) -> np.ndarray:
@@ -341,11 +339,12 @@ class GlobalFusion:
 
     def _update(self, t: float, live: np.ndarray, new: np.ndarray, x: np.ndarray,
                 P: np.ndarray, models: tuple[np.ndarray, np.ndarray, np.ndarray], E: ETrackSet,
-                row: np.ndarray, withheld: np.ndarray) -> None:
+                row: np.ndarray, withheld: np.ndarray) -> np.ndarray:
         """Localisation (64) per altitude band, crossing test (004) on the combined
         prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
-        MixtureFilter.predict), new weights, pruning and merging at t (global_filter);
-        status of the tracks; `withheld` (cap, B): ambiguous memberships, not used."""
+        MixtureFilter.predict), weights, pruning, merging at t (global_filter); status;
+        `withheld` (cap, B): ambiguous memberships, not used. Returns the slots
+        confirmed this cycle."""
         tab = self.table
         r = row[live]
         active = np.append(E.meas, False)[r] & ~np.isin(live, new)[:, None] & ~withheld[live]
@@ -371,13 +370,14 @@ class GlobalFusion:
         tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
         was = tab.confirmed[live]
         tab.confirmed[live] = was | (tab.n_good[live] >= self.p.confirm_cycles)
-        self.confirmed_now = live[tab.confirmed[live] & ~was]
         tab.n_quiet[live] = quiet_cycles(tab.n_quiet[live], np.append(E.updated, False)[r].any(1))
         tab.status[live] = reported_status(tab.confirmed[live], (r >= 0).any(1), np.isin(live, new),
                                            tab.n_quiet[live], self.p.coast_cycles)  # module 61
+        return live[tab.confirmed[live] & ~was]
 
-    def _manage(self, t: float, E: ETrackSet, row: np.ndarray) -> GlobalTracks:
-        """Module 61: scores, deletion, recycling; the global tracks of the cycle."""
+    def _manage(self, t: float, E: ETrackSet, row: np.ndarray, now: tuple | np.ndarray = ()) -> GlobalTracks:
+        """Module 61: scores, deletion, recycling, succession of `now` (slots confirmed this
+        cycle); the global tracks of the cycle."""
         tab = self.table
         live = tab.active_indices()
         r = row[live]
@@ -391,8 +391,8 @@ class GlobalFusion:
             self.crossing.forget(tab.id[np.union1d(dead, renamed)])
             self.succession.vacate(tab, dead)
             tab.remove(dead)
-        now = self.confirmed_now[tab.alive[self.confirmed_now]]
-        self.crossing.forget(self.succession.inherit(tab, now))
+        now = np.asarray(now, dtype=np.intp)
+        self.crossing.forget(self.succession.inherit(tab, now[tab.alive[now]]))
         self.t_last = t
         s = tab.active_indices()
         return GlobalTracks(float(t), tuple(self.base_ids), tab.id[s].copy(), tab.status[s].copy(),

@@ -10,9 +10,10 @@ aircraft 94 and 102 renumbered that way at t = 59-64 and 89-95, the new track ho
 two and three of the old track's elementary tracks.
 
 Rule: the number of a removed confirmed track that still holds elementary tracks is held
-for `keep` cycles (its slot is not given to new tracks); a track confirmed in that time that holds at least `min_shared` of
-the removed track's elementary tracks (same base, same elementary number) takes its
-number and birth time, the one with most shared first (the latest removed on a tie).
+for `keep` cycles (its slot is not given to new tracks); a track confirmed in that time
+that holds at least `min_shared` of the removed track's elementary tracks (same base,
+same elementary number) takes its number and birth time, the one with most shared
+first (the latest removed on a tie).
 Elementary tracks belong to one aircraft by construction, and two of them from two bases
 are what module 62 needs to start a track, so two shared are the evidence of one aircraft.
 """
