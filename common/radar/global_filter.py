@@ -5,8 +5,17 @@ State (complement of 001 [44]-[46], stated): every track is a Gaussian sum over
 altitude bands x motion models (common.radar.global_mixture; common.radar.global_init.
 altitude_bands says why a low target needs it: crossing.toml's 1.5 km target had a
 mean NEES of 9.4 over 16 seeds with one Gaussian, 2.9 with the bands). x and P of a
-track are the moments of its mixture. The motion models and their mixing are those of
-the module doc of common.radar.global_fusion (IMM).
+track are the moments of its mixture.
+Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
+model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
+(q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
+the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood of
+the scan's measurement [49]; a new track starts from the chain's stationary
+probabilities. Association (63), crossing (004) and output use the combined
+estimate. With one fixed Q the filter could not be both consistent on a straight
+target and follow a 2 deg/s turn (two_targets.toml: a Q sized for the turn gave a
+straight target's mean NEES 1.88; an adaptive q reacted after the gate [48] had
+dissociated the bases at the turn's onset, NEES bursts of 100-450).
 Decorrelation (complement of 001, common.radar.decorrelation): modules 64-65 do not take the
 elementary tracks' filtered estimates as measurements (their errors are correlated in
 time, which made the global covariance far too small), but the equivalent measurement

@@ -1,21 +1,20 @@
 """Module 61 of 001 (management) and the cycle of step 24, "fusion posterior".
 
-`GlobalFusion.push(base, tracks, stale)` takes the elementary tracks of one base and
-scan (typed arrays: common.radar.elementary.ElementaryTracks) and returns the global
-tracks of the cycles it completed (common.radar.global_report.GlobalTracks); the wire
-messages are parsed and built once, at the service (common.wire.radar_messages). A cycle at time t runs
+`GlobalFusion.push(base, tracks, stale)` takes the elementary tracks of one base and scan
+(typed arrays: common.radar.elementary.ElementaryTracks) and returns the global tracks of
+the cycles it completed (common.radar.global_report.GlobalTracks); the wire messages are
+parsed and built once, at the service (common.wire.radar_messages). A cycle at time t runs
 when every base that is not `stale` has reported t or a later time; stale bases (the
 caller's judgement, e.g. silent for some seconds of wall time: the service decides, the
-core has no clock) are treated as not reporting in that cycle (their memberships are
-kept, without measurement). Within a cycle the bases are processed in configured order,
-so the output depends neither on the arrival order of one cycle's messages nor on how
-the bases' streams interleave, as long as no base is declared stale.
+core has no clock) are treated as not reporting in that cycle (their memberships are kept,
+without measurement). Within a cycle the bases are processed in configured order, so the
+output depends neither on the arrival order of one cycle's messages nor on how the bases'
+streams interleave, as long as no base is declared stale.
 
 Deviation (stated): 001's rule "every base reported t, or any base reported a later
 time" assumes bases in lock step with real time; faster than real time (replay) the
-per-base processes drift apart by tens of scans (29 measured on crossing.toml), and a
-message-time rule ran cycles without a base that was merely slow, rejected its report
-as late and made the output depend on process timing.
+per-base processes drift apart by tens of scans (29 measured on crossing.toml): a
+message-time rule ran cycles without a merely slow base and depended on process timing.
 
 Cycle at t (001 figure 7):
   predict every component of every global track to t ([55]-[56], IMM mixing);
@@ -24,7 +23,8 @@ Cycle at t (001 figure 7):
     free elementary tracks of non-contributing bases, including to tracks in pure
     prediction (resolution loop); a base whose elementary tracks of two tracks pass
     [48] against each other's track is not used by either this scan
-    (global_assoc.ambiguous_members says why);
+    (global_assoc.ambiguous_members says why); a confirmed track that lost a member and
+    that its sound members contradict is rebuilt (common.radar.global_reopen);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
     [46]); candidates that can be extended to more bases win conflicts, then lower
     residual; a candidate's conflicts include the elementary tracks of the other bases
@@ -51,16 +51,7 @@ Cycle at t (001 figure 7):
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
 Decorrelation, module 64 per band and the mixture: common.radar.global_filter. Modules
 63 ([48]) and 62 use the elementary tracks' estimates (common.radar.global_assoc: why).
-Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
-model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
-(q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
-the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood of
-the scan's measurement [49]; a new track starts from the chain's stationary
-probabilities. Association (63), crossing (004) and output use the combined
-estimate. With one fixed Q the filter could not be both consistent on a straight
-target and follow a 2 deg/s turn (two_targets.toml: a Q sized for the turn gave a
-straight target's mean NEES 1.88; an adaptive q reacted after the gate [48] had
-dissociated the bases at the turn's onset, NEES bursts of 100-450). Seed path
+Motion model: an IMM of two [51] models (common.radar.global_filter says why). Seed path
 (`FusionParams.filter = "seed"`): 001's single EKF (benchmarks/seed_vs_mixture.py).
 """
 
@@ -83,6 +74,7 @@ from common.radar.global_assoc import (ETrackSet, ambiguous_members, component_g
 from common.radar.global_filter import MixtureFilter
 from common.radar.global_merge import merge_tracks
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
+from common.radar.global_reopen import reopen
 from common.radar.global_report import GlobalTracks, etrack_set
 from common.radar.global_succession import Succession
 from common.radar.global_status import quiet_cycles, reported_status
@@ -127,6 +119,7 @@ class FusionParams(InitParams):
         doc, "Seed path"): module 62's blocks [36]-[41] without altitude prior,
         [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
         and IMM parameters are then unused.
+    reopen_altitude: rebuild a contradicted track (common.radar.global_reopen; "mixture").
     """
 
     gate_prob: float = 0.999
@@ -149,6 +142,7 @@ class FusionParams(InitParams):
     init_confirmed_only: bool = True
     eq_gate_prob: float = 0.99999
     filter: Literal["mixture", "seed"] = "mixture"
+    reopen_altitude: bool = True
 
 
 class GlobalFusion:
@@ -173,13 +167,14 @@ class GlobalFusion:
             raise ValueError("global fusion needs >= 2 bases sharing one receiver (001)")
         B = len(bases)
         self.filter = MixtureFilter(self.p, self.tx, self.rx)
+        self.reopens = self.p.reopen_altitude and self.p.filter == "mixture"
         K = self.filter.A * self.filter.M  # components: altitude bands x motion models
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "n_quiet": ((), np.int64),
                                           "born": ((), float), "confirmed": ((), bool),
                                           "located": ((), bool), "ambiguous": ((), bool),
-                                          "xm": ((K, 6), float), "Pm": ((K, 6, 6), float),
-                                          "mu": ((K,), float)})
+                                          "suspect": ((), bool), "mu": ((K,), float),
+                                          "xm": ((K, 6), float), "Pm": ((K, 6, 6), float)})
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.succession = Succession(self.p.max_coast)  # common.radar.global_succession
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
@@ -221,7 +216,9 @@ class GlobalFusion:
         tab = self.table
         live = tab.active_indices()
         x, P, xm, Pm, c = self.filter.predict(tab, t, live)  # [55]-[56]
-        row = self._confirm(live, (c, xm, Pm), E, reported)
+        row, lost = self._confirm(live, (c, xm, Pm), E, reported)
+        redo = reopen(lost[tab.confirmed[lost] & self.reopens], self.filter, (x, P, xm, Pm, c),
+                      row, E, self.tx, self.rx, self.init_p, self.p.gate_prob)
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
         self._extend(live, (c, xm, Pm), E, reported, free, row)
@@ -237,17 +234,19 @@ class GlobalFusion:
                 row[new, E.base[used[:, k]]] = used[:, k]
             self._extend(new, (c, xm, Pm), E, reported, free, row)
         now = tab.active_indices()
-        withheld = ambiguous_members(c, xm, Pm, x, P, row, now[~np.isin(now, new)], E, self.tx,
-                                     self.rx, self.az_gate, self.gamma_max, self.swap_gate)
+        withheld = ambiguous_members(c, xm, Pm, x, P, row, now[~np.isin(now, np.r_[new, redo])], E,
+                                     self.tx, self.rx, self.az_gate, self.gamma_max, self.swap_gate)
+        withheld[redo] = True  # rebuilt from this scan's estimates (global_reopen)
         confirmed_now = self._update(t, now, new, x, P, (xm, Pm, c), E, row, withheld)
         return self._manage(t, E, row, confirmed_now)
 
     def _confirm(self, live: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
-                 E: ETrackSet, reported: np.ndarray) -> np.ndarray:
+                 E: ETrackSet, reported: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Module 63 task 1: row of E of every membership (cap, B) after dissociating
         members that left or fail the gate [48] in every live component of the
         predicted mixture (weights, means, covariances; global_assoc.
-        gated_component_pairs says why); -1 where none or base not reported."""
+        gated_component_pairs says why), -1 where none or base not reported; and the
+        slots that lost a member (here, or by module 64's v_b test last cycle; global_reopen)."""
         tab = self.table
         B = len(self.base_ids)
         row = np.full((tab.capacity, B), -1, dtype=np.intp)
@@ -263,7 +262,7 @@ class GlobalFusion:
                                  self.tx[b[sel]], self.rx[b[sel]], self.gamma_max)  # [48]
         tab.has[s[~ok], b[~ok]] = False  # dissociation
         row[s[ok], b[ok]] = r[ok]
-        return row
+        return row, np.union1d(s[~ok], live[tab.suspect[live]])
 
     def _extend(self, slots: np.ndarray, mixture: tuple[np.ndarray, np.ndarray, np.ndarray],
                 E: ETrackSet, reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
@@ -354,6 +353,7 @@ class GlobalFusion:
         fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
         active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
         tab.has[live] &= ~fix.dropped
+        tab.suspect[live] = fix.dropped.any(axis=1)  # global_reopen, next cycle
         row[live] = r = np.where(fix.dropped, -1, r)
         tab.located[live] = located = fix.located  # global_merge.explained's held
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)

@@ -118,7 +118,8 @@ def coarse_intersection(
 
 
 def pair_velocity(
-    pos: np.ndarray, vb: np.ndarray, svb: np.ndarray, tx: np.ndarray, rx: np.ndarray
+    pos: np.ndarray, vb: np.ndarray, svb: np.ndarray, tx: np.ndarray, rx: np.ndarray,
+    valid: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """001 [42]-[43] and [46]: (vx, vy) (P, 2) and its covariance (P, 2, 2).
 
@@ -126,6 +127,9 @@ def pair_velocity(
     tx (P, 2, 3), rx (P, 2, 3). Row k of A [43] is the (x, y) part of u_T + u_R of base
     k (v_z neglected, as in the seed). The seed prints the y entries of [43] over
     ||y - y_T||; the gradient of r_b (and [2]) has the 3-D norms, used here.
+    valid (P, K): K >= 2 bases of which these rows count (common.radar.global_reopen);
+    then the weighted least squares solution of the K rows of [42], its covariance the
+    inverse information (for two valid rows the same as [42] and [46]).
     """
     d_t = pos[:, None, :] - tx
     d_r = pos[:, None, :] - rx
@@ -133,6 +137,10 @@ def pair_velocity(
         d_r, axis=-1, keepdims=True
     )
     A = g[..., :2]  # 001 [43]
+    if valid is not None:
+        w = np.where(valid, 1.0 / svb**2, 0.0)
+        cov = np.linalg.inv(np.einsum("pki,pk,pkj->pij", A, w, A))
+        return np.einsum("pij,pkj,pk->pi", cov, A, w * np.where(valid, vb, 0.0)), cov
     v = np.linalg.solve(A, vb[..., None])[..., 0]  # 001 [42]
     A_inv = np.linalg.inv(A)
     cov = A_inv @ (svb[..., None] ** 2 * np.eye(2)) @ np.swapaxes(A_inv, 1, 2)  # 001 [46]
@@ -228,7 +236,7 @@ def pair_candidates(
 
 def altitude_bands(
     pos: np.ndarray, y: np.ndarray, R: np.ndarray, base: np.ndarray, rows: np.ndarray,
-    tx: np.ndarray, rx: np.ndarray, p: InitParams,
+    tx: np.ndarray, rx: np.ndarray, p: InitParams, evidence: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Initial state of new tracks as a Gaussian sum over altitude bands (complement of
     001 [44]-[46], stated): (x (W, A, 6), P (W, A, 6, 6), weights (W, A)).
@@ -251,23 +259,39 @@ def altitude_bands(
     (common.radar.global_mixture). The evidence of the two elementary estimates is not used:
     just after confirmation their covariance is not reliable enough to weigh altitudes
     (measured: with it, a 3.4 sigma azimuth error of one elementary track took the
-    true band out at the first cycle, crossing.toml seed 16, NEES 19).
-    rows (W, 2): the two elementary tracks (rows of y, R, base)."""
+    true band out at the first cycle, crossing.toml seed 16, NEES 19). evidence=True (a
+    track rebuilt from mature elementary tracks, common.radar.global_reopen): weights
+    by the Laplace evidence of each band, log w_a = -J_a / 2 + log det(C_a) / 2 - log s_a
+    (J_a: the least-squares cost of the ranges, azimuths and altitude prior at the band's
+    solution, C_a its covariance), normalised.
+    rows (W, 2): the two elementary tracks (rows of y, R, base); or (W, K) with -1 for
+    none, at least two valid per row (common.radar.global_reopen: velocity by least
+    squares over the valid rows, `pair_velocity`)."""
     W, A = rows.shape[0], p.alt_bands
     z_a = p.z_min + p.alt_band_low * p.alt_band_ratio ** np.arange(A)
     s_a = 0.5 * (p.alt_band_ratio - 1.0) * z_a
     sig = np.sqrt(np.diagonal(R, axis1=1, axis2=2))
+    valid = rows >= 0
     pb = base[rows]
     c = Constraints(y[rows, 0], sig[rows, 0], y[rows, 2], sig[rows, 2],
-                    np.ones(rows.shape, bool), tx[pb], rx[pb]).take(np.repeat(np.arange(W), A))
+                    valid, tx[pb], rx[pb]).take(np.repeat(np.arange(W), A))
     x0 = np.repeat(pos, A, axis=0)
     zc, sc = np.tile(z_a, W), np.tile(s_a, W)
     x0[:, 2] = zc
     xs, Cs = gauss_newton(x0, c, z_min=p.z_min, z_prior=(zc, sc))
     v, v_cov = pair_velocity(xs, np.repeat(y[rows, 1], A, axis=0), np.repeat(sig[rows, 1], A, axis=0),
-                             tx[np.repeat(pb, A, axis=0)], rx[np.repeat(pb, A, axis=0)])
+                             tx[np.repeat(pb, A, axis=0)], rx[np.repeat(pb, A, axis=0)],
+                             None if valid.shape[1] == 2 and valid.all() else np.repeat(valid, A, axis=0))
     x, P = initial_state(xs, Cs, v, v_cov, p.sigma_vz, decouple_z=False)
-    return x.reshape(W, A, 6), P.reshape(W, A, 6, 6), np.full((W, A), 1.0 / A)
+    w = np.full((W, A), 1.0 / A)
+    if evidence:
+        res_rb, res_az, _ = residuals(xs, c)
+        cost = np.sum(np.where(c.valid, (res_rb / c.srb) ** 2 + (res_az / c.saz) ** 2, 0.0), axis=1)
+        cost += ((xs[:, 2] - zc) / sc) ** 2
+        logw = (-0.5 * cost + 0.5 * np.linalg.slogdet(Cs)[1] - np.log(sc)).reshape(W, A)
+        w = np.exp(logw - logw.max(axis=1, keepdims=True))
+        w /= w.sum(axis=1, keepdims=True)
+    return x.reshape(W, A, 6), P.reshape(W, A, 6, 6), w
 
 
 def select(members: np.ndarray, priority: np.ndarray) -> np.ndarray:

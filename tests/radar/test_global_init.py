@@ -116,6 +116,24 @@ def test_pair_velocity_exact_on_noiseless_data() -> None:
     assert np.all(np.linalg.eigvalsh(cov) > 0)  # [46]
 
 
+def test_pair_velocity_least_squares_over_valid_rows() -> None:
+    """K bases with a validity mask: exact on noiseless data with three valid rows, a
+    wrong v_b in an invalid row is ignored, and two valid rows give [42] and [46]."""
+    pos = np.array([[-30000.0, 50000.0, 9000.0]])
+    vel = np.array([200.0, -50.0, 0.0])
+    tx = TX[None]
+    vb = np.array([[bistatic_range_rate(pos[0], vel, TX[k], RX) for k in range(3)]])
+    sig = np.array([[1.0, 2.0, 1.5]])
+    v, cov = pair_velocity(pos, vb, sig, tx, np.zeros((1, 3, 3)), np.ones((1, 3), bool))
+    np.testing.assert_allclose(v[0], vel[:2], atol=1e-8)
+    vb[0, 2] += 500.0
+    valid = np.array([[True, True, False]])
+    v, cov = pair_velocity(pos, vb, sig, tx, np.zeros((1, 3, 3)), valid)
+    v2, cov2 = pair_velocity(pos, vb[:, :2], sig[:, :2], tx[:, :2], np.zeros((1, 2, 3)))
+    np.testing.assert_allclose(v, v2, atol=1e-8)
+    np.testing.assert_allclose(cov, cov2, rtol=1e-8)
+
+
 def test_initial_state_layout() -> None:
     pos_cov = np.array([[[4.0, 1.0, 0.5], [1.0, 9.0, 0.2], [0.5, 0.2, 16.0]]])
     v_cov = np.array([[[2.0, 0.3], [0.3, 3.0]]])

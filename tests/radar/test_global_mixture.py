@@ -112,6 +112,27 @@ def test_altitude_bands_hold_a_low_target() -> None:
     assert e_pos @ np.linalg.solve(P[0, near][np.ix_(POS, POS)], e_pos) < 14.2  # chi2(3) 99.7 %
 
 
+def test_altitude_bands_of_more_bases_with_gaps() -> None:
+    """Rows (W, K) with -1 for none (common.radar.global_reopen): a -1 column changes
+    nothing, and a third base narrows every band's position covariance."""
+    cfg = load(DENSE)
+    tx = np.array([b.tx for b in cfg.bases[:3]])
+    rx = np.array([b.rx for b in cfg.bases[:3]])
+    s = np.zeros((1, 6))
+    s[0, POS], s[0, [1, 3]] = [19528.0, 36055.0, 4000.0], [-154.6, 82.6]
+    y = np.vstack([project(s, tx[k], rx[k]) for k in range(3)])
+    R = np.tile(np.diag([60.0**2, 0.5**2, np.radians(0.5) ** 2]), (3, 1, 1))
+    start = s[:, POS] + [[0.0, 0.0, 2000.0]]
+    p = InitParams()
+    two = altitude_bands(start, y, R, np.arange(3), np.array([[0, 1]]), tx, rx, p)
+    gap = altitude_bands(start, y, R, np.arange(3), np.array([[0, 1, -1]]), tx, rx, p)
+    three = altitude_bands(start, y, R, np.arange(3), np.array([[0, 1, 2]]), tx, rx, p)
+    for a, b in zip(two, gap):
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-6)
+    det = np.linalg.det(three[1][0][:, POS][:, :, POS]) / np.linalg.det(two[1][0][:, POS][:, :, POS])
+    assert np.all(det < 1.0)
+
+
 def test_four_bases_one_global_track_per_target() -> None:
     """Module 62 with four bases: pairs {b1, b2} and {b3, b4} of one target must not
     start two tracks; every target gets one track holding its four elementary tracks."""

@@ -1,0 +1,90 @@
+"""A track rebuilt from its sound members when they contradict it (complement of 001
+module 63, stated).
+
+001's module 63 dissociates an elementary track that fails [48] and goes on with the
+global track's estimate. With one receiver the altitude is the weakest coordinate: a
+track initialised on a wrong combination (the elementary tracks of two aircraft a
+kilometre apart in plan at different altitudes, one base's tracks exchanged) settles at
+a compromise altitude with a small variance. When the foreign elementary track is
+finally dropped, the remaining ones pull the altitude back slowly while the variance,
+built on the wrong combination, stays small; the track's own elementary track of that
+base then fails [48] against it and is never admitted (measured, dense1000 seed 7:
+aircraft 931 tracked at 2.0-3.9 km, truth 5.0 km, sigma_z 200-360 m, for 60 s, and its
+neighbour 336 at 6.3 km, truth 3.9 km; per-target mean NEES 21 000 and 49 000).
+
+Here a confirmed track that lost a member this cycle (dissociated by module 63, or by
+module 64's v_b test the cycle before) and holds at least MIN_SOUND sound members
+(confirmed elementary tracks updated this scan: three bases can give an altitude, two a
+curve) is tested against them: their altitude bands are built as module 62 builds a new
+track's (common.radar.global_init.altitude_bands: Gauss-Newton per band, velocity [42]
+by least squares), weighted by their evidence (mature estimates, unlike module 62's two
+young ones). The track takes that mixture (its number, status and memberships stay) if
+(1) the mixture resolves the altitude: its sigma_z below band_linear times the height
+above the receiver, the linear regime of common.radar.global_mixture (three bases of
+poor vertical geometry, or two aircraft's elementary tracks, give a flat evidence: a
+rebuild from it loses the track; measured, dense1000 seed 2: a track rebuilt with
+sigma_z 1.8 km lost its members and left a ghost at 20 km holding a neighbour's
+elementary tracks, mean NEES 3.67 -> 5.40), and (2) the track's predicted position lies
+outside every band of weight >= 1e-3 at gate_prob (chi-square, 3 dof, on the position
+with both covariances). Otherwise nothing changes: a member lost to a manoeuvre, a
+crossing or a track's end, with the others agreeing, costs no information. The rebuilt
+track is not updated in that cycle (as a new track is not): its members' estimates
+already hold the scan. Measured (benchmarks/dense_scale.py, dense1000 seeds 1-10): 0-9
+rebuilds per run; seed 7's mean NEES 81.9 -> 6.7 (both aircraft above), the other
+seeds' NEES, missed and false tracks unchanged within 0.1; switches per 100 targets
++0.1 on seed 1, +0.2 on seed 7, -0.1 on seeds 8 and 9 (docs/radar_at_scale.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from common.core import imm
+from common.core.gating import chi2_gate
+from common.radar.bistatic import POS
+from common.radar.global_assoc import ETrackSet
+from common.radar.global_filter import MixtureFilter
+from common.radar.global_init import InitParams, altitude_bands
+
+MIN_SOUND = 3
+
+
+def sound_members(row: np.ndarray, E: ETrackSet) -> np.ndarray:
+    """Rows of E (n, B) of the memberships whose elementary track is confirmed and was
+    updated this scan (an estimate to rebuild from), -1 elsewhere."""
+    ok = np.append(E.updated & E.confirmed, False)[row]
+    return np.where(ok, row, -1)
+
+
+def contradicted(x: np.ndarray, P: np.ndarray, xb: np.ndarray, Pb: np.ndarray, wb: np.ndarray,
+                 gate: float, w_min: float = 1e-3) -> np.ndarray:
+    """Tracks (n,) whose predicted position (x (n, 6), P (n, 6, 6)) lies outside every
+    band of weight >= w_min of their rebuilt mixture (xb (n, A, 6), Pb, wb (n, A)):
+    d^2 = (p - p_a)' (P_pos + P_a,pos)^-1 (p - p_a) > gate for each."""
+    e = x[:, None, POS] - xb[..., POS]
+    S = P[:, None][..., POS, :][..., POS] + Pb[..., POS, :][..., POS]
+    d2 = np.einsum("nai,nai->na", e, np.linalg.solve(S, e[..., None])[..., 0])
+    return np.all((d2 > gate) | (wb < w_min), axis=1)
+
+
+def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndarray, ...],
+           row: np.ndarray, E: ETrackSet, tx: np.ndarray, rx: np.ndarray, p: InitParams,
+           gate_prob: float) -> np.ndarray:
+    """Rebuild, in place in the predicted (x, P, xm, Pm, c) (MixtureFilter.predict), the
+    mixture of each of `candidates` (confirmed tracks that lost a member this cycle) with
+    at least MIN_SOUND sound members whose evidence-weighted altitude bands resolve the
+    altitude and contradict its prediction (module doc); returns the rebuilt slots."""
+    x, P, xm, Pm, c = predicted
+    rows = sound_members(row[candidates], E)
+    enough = (rows >= 0).sum(axis=1) >= MIN_SOUND
+    s, rows = candidates[enough], rows[enough]
+    if s.size == 0:
+        return s
+    xb, Pb, wb = altitude_bands(x[s][:, POS], E.y, E.R, E.base, rows, tx, rx, p, evidence=True)
+    nx, nP, nc = filt.initial(xb, Pb, wb)
+    cx, cP = imm.combine(nc, nx, nP)
+    resolved = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])
+    bad = resolved & contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
+    s = s[bad]
+    xm[s], Pm[s], c[s], x[s], P[s] = nx[bad], nP[bad], nc[bad], cx[bad], cP[bad]
+    return s
