@@ -222,8 +222,17 @@ a re-link or crossing_order exchanging the numbers of two resolved tracks:
     between the targets at 90.3, gave omega to #1: swap at t = 925); all else the same
     (seeds 1-160 and 161-320: break runs, false tracks and RMSE per scene identical to
     those of the tracker without it, measured at 0d5e975 on the same common.sonar code;
-    seeds 161-320 4dpm_eq 267 and 4dpm_uneq 169 swap runs). Neither swap run
-    is reachable by the re-link rules: 267 needs a scorer that does not give one track to
+    seeds 161-320 4dpm_eq 267 and 4dpm_uneq 169 swap runs). Kept (mht_tracks
+    `_coalesced_pick`): only when omega's bearing is outside the gate lambda of both
+    members' predictions, the member whose state the pair's main hypothesis continues
+    likelier keeps it and omega takes the other's place (else both pairings as before):
+    169 re-linked right at t = 280 (#3 on T1, #30 on T2; by the scorer of benchmarks/mht.py
+    2 swaps in the run instead of 1, the t = 250 pick and its undoing); cross_slow 129 as
+    before (omega on #3's prediction in bearing). Seeds 1-160 and 161-320, every scene:
+    swap runs, break runs, false tracks and RMSE identical to the tracker without it
+    (0 / 2 swap runs; break runs cross_uneq 135, cross_turn 35, cross_slow 154, 4dpm_eq
+    135, 4dpm_uneq 135, hold5 109 / cross_slow 198, 208, 252, hold5 281). Neither swap
+    run is reachable by the re-link rules: 267 needs a scorer that does not give one track to
     two resolved truths (or an earlier confirmation of T2's track), 169 a pair that does
     not coalesce on the strong target (the likely origin: the split-off's rate, from the
     hypotheses of the track it split from) or a re-link before the truths resolve (T2's
