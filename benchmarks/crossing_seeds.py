@@ -185,6 +185,58 @@ stated; the two kept ones above):
     longer break runs, 106/107/133/150/268 clean. Not run over every scene for lack of
     time; not kept (on fusion alone, hold5 106 stays a swap run: a -17 deg/min estimate 7
     sigma from the past is no Gaussian neighbour of it and the fused state is wrong).
+Traced (session 15, the tracker of 9372dc8), the two swap runs of seeds 161-320; neither is
+a re-link or crossing_order exchanging the numbers of two resolved tracks:
+  - sonar_cross_4dpm_eq 267 is a scoring artefact: #4 confirmed at t = 40 on T1 (87.09,
+    +1.95 deg/min; T1 +2.0), T2's #2 tentative until t = 60. At t = 50 #4 took part of T2's
+    detection (91.5; mixture 88.52, +3.51 deg/min), 4.81 deg from T2 (93.33, 6.66 deg from
+    T1, resolved): the scorer's per-truth nearest association (several truths may share a
+    track) gave T2 to #4, the only confirmed track within its 5 deg gate (T1 to #4 too, at
+    1.85 deg). #2 confirmed at t = 60 (truths 6.0 deg apart, not resolved); the pair
+    coalesced on T2 at t = 70 (92.27 / 92.02), T1 unfollowed for 80 s (#4 above T2 at
+    +4-5 deg/min, a split-off at T1's 87.0 never confirmed), both met again at the crossing
+    (t = 150) and left it in their order, #2 falling with T2, #4 rising with T1
+    (crossing_order at t = 250: no exchange). At t = 250 T2 was scored with #2, its track
+    since t = 30: the "swap" 4 -> 2. No number changed target.
+  - sonar_cross_4dpm_uneq 169 (T2 weak, 6-8 dB against T1's 14): #3 confirmed on T1 at
+    t = 40; T2's tentative #4 (94.5, -1.8 deg/min) gone at t = 60 (missed); #30 split
+    off #3 at t = 100 at T2's bearing and level (91.9, 6.7 dB) with T1's rising rate (+3.4
+    deg/min; T2 falls at -2.0), confirmed at t = 140 with +2.80 +- 0.44 deg/min (11 sigma
+    from T2's rate). In the conflict (t = 150-270) the pair coalesced on T1 (both +1.3-2.0
+    deg/min, #30's level 4 -> 10 dB); T2's detections (88.3 at t = 210, 87.0, 86.2, 88.1)
+    went to neither. At t = 250 (truths 6.66 deg apart) T1 is nearer #30 (92.49) than #3
+    (92.19, T1 at 93.33): the scored swap 3 -> 30 is the pick between two tracks 0.3 deg
+    apart on one target. At t = 280 T2's new track #64 (85.04, -2.10 deg/min, 8.3 dB) was
+    re-linked (coalesced branch) to #3, wrongly (#30 stays on T1): against #3's state
+    before the conflict (t = 140, 89.60 / +1.71, predicted to 93.58) omega's marginal d^2 is 25
+    in bearing and 8 in rate, against #30's (92.10 / +2.80, predicted to 98.63) 63 and 13, so
+    the pairing with omega on #3 won (ln N -4.1 + 4.3 against 9.6 - 24.2) although the
+    pair's main hypothesis continues #3's state (ln N 9.6-9.8) better than #30's (2.6-4.3).
+    Tried, not kept: d^2 of `continuation` capped at the gate lambda^2 (a state outside the
+    gate of a prediction is no continuation of it, how far outside no evidence): 169
+    re-linked right (#3 back on T1 from t = 280) but still a swap run (the t = 250 pick,
+    then 30 -> 3: 2 swaps instead of 1); seeds 1-160 1 swap run (cross_slow 129 new: omega
+    #393 at t = 830 on T2 at 86.68 with a young -6.07 deg/min lies on #3's prediction in
+    bearing, d^2 0.07 + 20.6 in rate, against #1's 6.7 + 38 (#1's rate before the conflict
+    +1.81 deg/min, T1 +0.69, over 445 s); capped at 12.25 both, the pair's main hypothesis,
+    between the targets at 90.3, gave omega to #1: swap at t = 925); all else the same
+    (seeds 1-160 and 161-320: break runs, false tracks and RMSE per scene identical to
+    those of the tracker without it, measured at 0d5e975 on the same common.sonar code;
+    seeds 161-320 4dpm_eq 267 and 4dpm_uneq 169 swap runs). Kept (mht_tracks
+    `_coalesced_pick`): only when omega's bearing is outside the gate lambda of both
+    members' predictions, the member whose state the pair's main hypothesis continues
+    likelier keeps it and omega takes the other's place (else both pairings as before):
+    169 re-linked right at t = 280 (#3 on T1, #30 on T2; by the scorer of benchmarks/mht.py
+    2 swaps in the run instead of 1, the t = 250 pick and its undoing); cross_slow 129 as
+    before (omega on #3's prediction in bearing). Seeds 1-160 and 161-320, every scene:
+    swap runs, break runs, false tracks and RMSE identical to the tracker without it
+    (0 / 2 swap runs; break runs cross_uneq 135, cross_turn 35, cross_slow 154, 4dpm_eq
+    135, 4dpm_uneq 135, hold5 109 / cross_slow 198, 208, 252, hold5 281). Neither swap
+    run is reachable by the re-link rules: 267 needs a scorer that does not give one track to
+    two resolved truths (or an earlier confirmation of T2's track), 169 a pair that does
+    not coalesce on the strong target (the likely origin: the split-off's rate, from the
+    hypotheses of the track it split from) or a re-link before the truths resolve (T2's
+    new track was born at t = 250).
 """
 
 from __future__ import annotations

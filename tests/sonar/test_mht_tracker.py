@@ -228,6 +228,25 @@ def test_relink_of_a_new_track_to_a_coalesced_pair_by_the_continuation_of_both()
     assert trk.ht.tolist() == [2, 1, 0] and (tr.IN[:2] == -1).all()  # track 1 goes on with omega
 
 
+def test_a_new_track_that_continues_neither_member_goes_by_the_pair_s_own_evidence():
+    """The pair coalesced on the rising target, which its main hypotheses continue from
+    track 1's state before the conflict; track 2's state before it had a wrong rate (rising
+    twice as fast: its prediction 8 deg above the pair). Omega, the lost target's new track
+    6 deg below, is outside the gate of both predictions in bearing, nearer track 1's: no
+    evidence, so track 2 takes it and track 1 keeps its target (sonar_cross_4dpm_uneq seed
+    169: by both pairings omega went to the track whose prediction it missed by less)."""
+    from common.sonar.mht_tracks import relink
+
+    trk = _coalesced_pair(1.0 - 6 * DEG, (1.0 + 2 * DEG, 1.0 + 2 * DEG))
+    tr = trk.tr
+    rate = 4 * DEG / 400.0
+    tr.pre_x[1, 1] = 2 * rate
+    trk.hx[:2, 1] = rate
+    drop = relink(trk, np.array([2]), 400.0)
+    assert drop.tolist() == [False, False, True]
+    assert trk.ht.tolist() == [0, 2, 1]  # track 2 goes on with omega
+
+
 @pytest.mark.parametrize("omega_deg, duplicate", [(1.5, True), (2.0, False)])
 def test_a_new_track_beside_a_pair_that_holds_both_targets_is_a_duplicate(omega_deg, duplicate):
     """The pair took one measurement (000's unresolved interpretation (1)) but its main
