@@ -16,7 +16,8 @@ cycle to both trackers. MHT parameters: MhtParams defaults with rho_F = the clut
 density per rad and per 10 dB of level (clutter / (2 pi 10)).
 
 Scores per run (truths and confirmed tracks in bearing, common.evaluation.crossing_eval
-association: nearest confirmed track within 5 sigma = 5 deg, sigma 1 deg):
+association: one to one within 5 sigma = 5 deg, sigma 1 deg; shared nearest tracks before
+session 13, benchmarks/crossing_seeds.py says what changed):
   swaps   a resolved truth (other truths > 6 deg away) changes its track number while
           the old track is still live (crossing_eval.score_run);
   breaks  the same change while the old track is gone;

@@ -22,9 +22,10 @@ Modes: gnn, the single-hypothesis tracker with seed 004 crossing management
 [sonar.tracker.mht] and rho_F = the scene's false detections per rad and per 10 dB (as
 benchmarks/mht.py).
 
-Scoring per cycle: each truth takes the nearest confirmed track within 5 sigma of
-bearing (sigma = the array's sigma0); a confirmed track that is never such a nearest
-track over its whole life is a false track (per 100 cycles: false tracks / cycles x 100);
+Scoring per cycle: truths and confirmed tracks are paired one to one within 5 sigma of
+bearing (sigma = the array's sigma0; common.evaluation.crossing_eval.one_to_one, least
+total distance; until session 13 each truth took its nearest track, shared); a
+confirmed track that is never paired over its whole life is a false track (per 100 cycles: false tracks / cycles x 100);
 at a cycle where a truth is resolved (no other truth within 6 sigma), a track it was not
 resolved on before is a break if no other truth was resolved on it (a new number for the
 target: a lost track replaced, or a duplicate track taking over), a swap otherwise (as
@@ -107,6 +108,7 @@ sys.path.insert(0, str(REPO))
 
 from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
+from common.evaluation.crossing_eval import one_to_one  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
 from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
 from common.sonar.bearing_tracker import BearingTracker, TrackerParams  # noqa: E402
@@ -163,10 +165,9 @@ class Scorer:
         d = np.abs(wrap_pi(tb[:, None] - brg[None, :])) / self.sig
         sep = np.abs(wrap_pi(tb[:, None] - tb[None, :])) / self.sig
         np.fill_diagonal(sep, np.inf)
-        for i, tid in enumerate(truth_ids):
-            if d[i].min() > GATE:
+        for i, (tid, j) in enumerate(zip(truth_ids, one_to_one(d, GATE).tolist())):
+            if j < 0:
                 continue
-            j = int(np.argmin(d[i]))
             k = int(ids[j])
             self.useful.add(k)
             s.sq_err += float(wrap_pi(tb[i] - brg[j]) ** 2)

@@ -6,8 +6,13 @@ tracks expressed in the same measurement space (sonar: [bearing]; radar: [r_b, t
 Distances are Euclidean on components divided by `EvalParams.sigma`, angle components
 wrapped to [-pi, pi).
 
-Association (per cycle, per truth): the nearest confirmed track within `gate`; several
-truths may share a track.
+Association (per cycle): truths and confirmed tracks one to one, the assignment of least
+total distance over the pairs within `gate` (`one_to_one`). Until 2026-11-26 (session 13)
+each truth took its nearest confirmed track and several truths could share one: a
+resolved truth whose own track was not yet confirmed was scored on its neighbour's
+track and, once its own confirmed, counted a swap although no number had changed target
+(the MHT's sonar_cross_4dpm_eq seed 267: its one swap run; numbers before and after in
+benchmarks/crossing_seeds.py).
 Swap: at a cycle where the truth is resolved (every other truth farther than
 `resolved`), its associated track number differs from the one of its previous resolved
 cycle while that previous track is still live. Cycles where the truths are closer
@@ -27,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.optimize import linear_sum_assignment
 
 from common.core.angles import wrap_pi
 
@@ -87,16 +93,29 @@ def scaled_distance(a: np.ndarray, b: np.ndarray, p: EvalParams) -> np.ndarray:
     return np.sqrt(np.sum(np.square(d / np.asarray(p.sigma)), axis=-1))
 
 
+def one_to_one(d: np.ndarray, gate: float) -> np.ndarray:
+    """(n,) column assigned to each row of the distances d (n, m), -1 if none: rows and
+    columns one to one, least total distance over the pairs within gate (a pair beyond
+    it costs more than any set of pairs within, so it is never preferred to them)."""
+    out = np.full(d.shape[0], -1, dtype=np.int64)
+    if d.size == 0:
+        return out
+    far = gate * (min(d.shape) + 1)
+    r, c = linear_sum_assignment(np.where(d <= gate, d, far))
+    ok = d[r, c] <= gate
+    out[r[ok]] = c[ok]
+    return out
+
+
 def associate(f: Frame, p: EvalParams) -> np.ndarray:
-    """(n,) track number of the nearest confirmed track within the gate, -1 if none."""
+    """(n,) track number of each truth's confirmed track (`one_to_one` within the gate),
+    -1 if none."""
     conf = np.flatnonzero(f.confirmed)
     out = np.full(f.truth_ids.size, -1, dtype=np.int64)
     if conf.size == 0 or f.truth_ids.size == 0:
         return out
-    d = scaled_distance(f.truth, f.tracks[conf], p)
-    k = np.argmin(d, axis=1)
-    ok = d[np.arange(k.size), k] <= p.gate
-    out[ok] = f.track_ids[conf[k[ok]]]
+    k = one_to_one(scaled_distance(f.truth, f.tracks[conf], p), p.gate)
+    out[k >= 0] = f.track_ids[conf[k[k >= 0]]]
     return out
 
 

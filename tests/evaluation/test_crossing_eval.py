@@ -87,11 +87,21 @@ def test_tentative_tracks_are_not_associated() -> None:
     assert associate(frame(0.0, [0.0], {3: 0.0}, conf=set()), P).tolist() == [-1]
 
 
+def test_a_track_between_two_resolved_truths_is_one_truths_and_no_swap_follows() -> None:
+    """Truths 5 apart (resolved), track 7 confirmed on truth 1 and 2.8 from truth 2 whose
+    own track 8 is tentative: truth 2 has no track until 8 confirms; then nothing changed
+    target, so no swap (with shared association truth 2 was scored on 7, then on 8)."""
+    frames = [frame(float(k), [0.0, 5.0], {7: 2.2, 8: 5.0}, conf={7} if k < 5 else {7, 8})
+              for k in range(10)]
+    assert associate(frames[0], P).tolist() == [7, -1]
+    assert score_run(frames, P).swaps == 0
+
+
 def test_bearing_wrap() -> None:
     p = EvalParams(sigma=(math.radians(1.0),), gate=3.0, angle_idx=(0,))
     f = Frame.of(0.0, [1, 2], [math.radians(359.5), math.radians(0.5)], [9], [math.radians(0.2)],
                  [True], [False], 1)
-    assert associate(f, p).tolist() == [9, 9]
+    assert associate(f, p).tolist() == [-1, 9]  # one to one: the nearer truth (0.3 deg)
     assert np.allclose(separation(f, p), 1.0)
 
 
