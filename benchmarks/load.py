@@ -50,6 +50,9 @@ fusion handling p50 / p99 5 / 133 ms at 2x).
 dense1000 at 2x again on 2026-11-26 (session 12: number succession in global fusion;
 idle machine): kept up (last gtracks 0.12 s after its plots), 0 lost, 0 missed, 0
 rejected; end to end p50 / p99 147 / 3111 ms; global fusion handling p50 / p99 5.3 / 148 ms.
+Session 13 (the rebuild of contradicted tracks, common.radar.global_reopen; idle machine):
+kept up (0.13 s), 0 lost, 0 missed, 0 rejected; end to end p50 / p99 173 / 3286 ms; global
+fusion handling p50 / p99 7.4 / 188 ms.
 
 Run: .venv/bin/python benchmarks/load.py [--speed X] [--seconds S] [--seed N] [--scene NAME]
 """
