@@ -131,9 +131,12 @@ class Evaluation:
 
     c: float = 2000.0
     gamma: float = 2000.0
+    keep_steps: bool = False
     metrics: MetricsAccumulator = field(init=False)
     truth: dict[int, list[tuple[float, np.ndarray]]] = field(default_factory=dict)
     pairs: list[tuple[float, int, float, float, float]] = field(default_factory=list)
+    steps: list[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(
+        default_factory=list)
 
     def __post_init__(self) -> None:
         self.metrics = MetricsAccumulator(self.c, 2.0, self.gamma)
@@ -144,18 +147,32 @@ class Evaluation:
         for i, s in zip(truth_ids.tolist(), truth_x):
             self.truth.setdefault(int(i), []).append((t, s))
         res = self.metrics.add(t, truth_ids, truth_x[:, POS], track_ids, track_x[:, POS])
-        if res.rows.size:
-            e = track_x[res.cols] - truth_x[res.rows]
-            Pm = track_P[res.cols]
-            n_pos = nees(e[:, POS], Pm[:, POS][:, :, POS])
-            n_all = nees(e, Pm)
-            for r, a, b, d in zip(res.rows, n_pos, n_all, res.pair_distances):
-                self.pairs.append((t, int(truth_ids[r]), float(a), float(b), float(d) ** 2))
+        if self.keep_steps:
+            self.steps.append((t, np.array(truth_ids), np.array(truth_x), np.array(track_ids),
+                               np.array(track_x), np.array(track_P)))
+        self.pairs += _pair_rows(t, truth_ids, truth_x, track_x, track_P, res.rows, res.cols)
 
-    def after(self, settle: float) -> dict[int, np.ndarray]:
+    def joint_pairs(self, series: list[dict[int, int | None]]) -> list[tuple[float, int, float, float, float]]:
+        """The rows of `pairs` for the pairs of a truth -> track series over the kept steps
+        (keep_steps), e.g. the trajectory GOSPA assignment (metrics.joint_associations):
+        each truth scored against the track that follows it over the run, not against a
+        neighbour's track that one scan's GOSPA pairs it with."""
+        out: list[tuple[float, int, float, float, float]] = []
+        for (t, ti, tx, ki, kx, kP), step in zip(self.steps, series):
+            col = {int(k): j for j, k in enumerate(ki)}
+            rc = [(r, col[trk]) for r, i in enumerate(ti.tolist())
+                  if (trk := step.get(int(i))) is not None and trk in col]
+            rows, cols = (np.array(v, dtype=np.intp) for v in zip(*rc)) if rc else (np.zeros(0, np.intp),) * 2
+            out += _pair_rows(t, ti, tx, kx, kP, rows, cols)
+        return out
+
+    def after(self, settle: float, series: list[dict[int, int | None]] | None = None
+              ) -> dict[int, np.ndarray]:
         """Per truth id, rows (t, nees_pos, nees_state, sq_err) of the pairs made at
-        least `settle` seconds after that truth was first paired."""
-        a = np.array(self.pairs, dtype=float).reshape(-1, 5)
+        least `settle` seconds after that truth was first paired: the per-step GOSPA
+        pairs, or those of `series` (`joint_pairs`)."""
+        pairs = self.pairs if series is None else self.joint_pairs(series)
+        a = np.array(pairs, dtype=float).reshape(-1, 5)
         out = {}
         for i in np.unique(a[:, 1]).astype(int):
             rows = a[a[:, 1] == i]
@@ -187,16 +204,30 @@ class TargetScore:
     nees_state: float
 
 
+def _pair_rows(t: float, truth_ids: np.ndarray, truth_x: np.ndarray, track_x: np.ndarray,
+               track_P: np.ndarray, rows: np.ndarray, cols: np.ndarray
+               ) -> list[tuple[float, int, float, float, float]]:
+    """(t, truth id, position NEES, state NEES, squared position error) of the pairs
+    (truth row, track column)."""
+    e = track_x[cols] - truth_x[rows]
+    Pm = track_P[cols]
+    n_pos = nees(e[:, POS], Pm[:, POS][:, :, POS])
+    n_all = nees(e, Pm)
+    d2 = np.sum(e[:, POS] ** 2, axis=1)
+    return [(t, int(truth_ids[r]), float(a), float(b), float(d)) for r, a, b, d in zip(rows, n_pos, n_all, d2)]
+
+
 def score_targets(
     ev: Evaluation, tx: np.ndarray, rx: np.ndarray, info: np.ndarray, q: float, q_z: float,
-    P0: np.ndarray, settle: float,
+    P0: np.ndarray, settle: float, series: list[dict[int, int | None]] | None = None,
 ) -> dict[int, TargetScore]:
-    """RMSE against the PCRLB and NEES, per truth id, `settle` s after first pairing."""
+    """RMSE against the PCRLB and NEES, per truth id, `settle` s after first pairing (the
+    per-step GOSPA pairs, or those of `series`: Evaluation.after)."""
     times, states, present, ids = ev.truth_arrays()
     bound = pcrlb(times, states, present, tx, rx, info, q, q_z, P0)
     pos_var = np.trace(bound[:, :, POS][:, :, :, POS], axis1=2, axis2=3)
     out = {}
-    for i, rows in ev.after(settle).items():
+    for i, rows in ev.after(settle, series).items():
         if rows.shape[0] == 0:
             continue
         k = np.searchsorted(times, rows[:, 0])

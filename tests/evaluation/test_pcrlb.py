@@ -89,3 +89,25 @@ def test_score_targets_ratio_for_bound_sized_errors() -> None:
     for v in sc.values():
         assert v.n == 30 and 0.7 < v.rmse / v.bound < 1.3
         assert 1.5 < v.nees_pos < 4.5
+
+
+def test_joint_pairs_score_a_truth_against_its_own_track() -> None:
+    """Truth 1's track 7 is 1.5 km off in altitude (sigma 1 km: consistent); at one scan
+    a neighbour's track 8 (for truth 2, which leaves the scene) is nearer truth 1 in 3-D.
+    Per-step GOSPA pairs truth 1 with 8 there (NEES of a foreign track); the series of
+    the trajectory assignment keeps it on 7."""
+    P = np.diag([30.0, 5.0, 30.0, 5.0, 1000.0, 5.0]) ** 2
+    ev = Evaluation(c=2000.0, gamma=2000.0, keep_steps=True)
+    truth = np.array([[0.0, 0.0, 0.0, 0.0, 3000.0, 0.0], [5000.0, 0, 0, 0, 3000.0, 0]])
+    for k in range(6):
+        own = truth[0] + [0, 0, 0, 0, -1500.0, 0]
+        if k == 3:  # truth 2 gone, its track passes 1 km from truth 1
+            ev.add(float(k), np.array([1]), truth[:1], np.array([7, 8]),
+                   np.stack([own, truth[0] + [1000.0, 0, 0, 0, 0, 0]]), np.stack([P, P]))
+        else:
+            ev.add(float(k), np.array([1, 2]), truth, np.array([7, 8]), np.stack([own, truth[1]]),
+                   np.stack([P, P]))
+    step = ev.after(0.0)[1]
+    joint = ev.after(0.0, ev.metrics.joint_associations())[1]
+    assert step[:, 1].max() > 1000.0  # track 8 against truth 1: (1000 / 30)^2
+    assert joint.shape[0] == 6 and np.allclose(joint[:, 1], 2.25)  # (1500 / 1000)^2
