@@ -30,7 +30,7 @@ with both covariances). Otherwise nothing changes: a member lost to a manoeuvre,
 crossing or a track's end, with the others agreeing, costs no information. The rebuilt
 track is not updated in that cycle (as a new track is not): its members' estimates
 already hold the scan. Measured (benchmarks/dense_scale.py, dense1000 seeds 1-10): 0-9
-rebuilds per run; seed 7's mean NEES 81.9 -> 6.7 (both aircraft above), the other
+rebuilds per run; seed 7's mean NEES 81.9 -> 6.7 (per-step pairing; both aircraft above), the other
 seeds' NEES, missed and false tracks unchanged within 0.1; switches per 100 targets
 +0.1 on seed 1, +0.2 on seed 7, -0.1 on seeds 8 and 9 (docs/radar_at_scale.md).
 """
