@@ -35,14 +35,14 @@ the dimension (2-4.5 for the 3-D position).
 Current (2026-11-26, session 13: trajectory GOSPA scoring and pairing, the number
 succession of common.radar.global_succession, and the rebuild of contradicted tracks of
 common.radar.global_reopen; 120 s; CPU ms per scan on 2 cores shared with another
-session). dense and dense300, seeds 1 and 2 (session 12's rows; no rebuild fires there,
-and dense300 seed 1 gives the same NEES under both pairings, 3.21):
+session). dense and dense300, seeds 1 and 2 (no rebuild fires there; the dense rows are
+session 12's, on the per-step pairing):
 
   scene      targets plotter tracker fusion x real  missed       false        switch breaks RMSE/PCRLB NEES  origin cross  step  NEES
   dense          120     1.7     4.3    16.2   44.9  0.6 (0.5%)   0.2 (0.2%)    0.00   1.67   0.92     3.08   0.00  0.00  0.00     -
   dense300       300     3.3     8.4    34.1   21.8  1.5 (0.5%)   0.6 (0.2%)    0.00   1.33   0.92     3.21   0.00  0.00  0.67  3.21
   dense          120     1.8     4.5    16.6   43.5  0.7 (0.6%)   0.3 (0.2%)    0.83   1.67   0.94     2.88   0.83  0.00  0.83     -
-  dense300       300     2.8     7.2    32.4   23.6  1.6 (0.6%)   0.5 (0.2%)    0.00   0.67   0.95     3.12   0.00  0.00  1.33     -
+  dense300       300     2.7     7.4    33.1   23.2  1.6 (0.6%)   0.5 (0.2%)    0.00   0.67   0.95     2.86   0.00  0.00  1.33  3.12
   dense1000, seeds 1-14 (the scene's aircraft, other noise; 11-14 first run this session):
   seed 1        1000     8.7     26.3    126.5     6.2   7.0 ( 0.8%)   2.4 ( 0.3%)    0.60    2.20       0.96   3.07    0.50   0.10   3.50   3.07
   seed 2        1000     8.7     26.1    116.6     6.6  11.3 ( 1.2%)   7.1 ( 0.8%)    0.50    2.50       0.98   3.65    0.50   0.00   3.20   3.67

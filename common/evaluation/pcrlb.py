@@ -25,6 +25,9 @@ from common.radar.bistatic import POS, project_jacobian
 from common.evaluation.metrics import MetricsAccumulator
 from common.core.motion import cv_F, cv_Q
 
+PairRow = tuple[float, int, float, float, float]  # t, truth id, NEES pos, NEES state, error^2
+Series = list[dict[int, int | None]]  # truth -> track per step (metrics.joint_associations)
+
 
 def base_information(radar: Any, bases: Sequence[Any]) -> np.ndarray:
     """Expected information per base (B, 3, 3) of one scan: `channel_information` of each
@@ -134,7 +137,7 @@ class Evaluation:
     keep_steps: bool = False
     metrics: MetricsAccumulator = field(init=False)
     truth: dict[int, list[tuple[float, np.ndarray]]] = field(default_factory=dict)
-    pairs: list[tuple[float, int, float, float, float]] = field(default_factory=list)
+    pairs: list[PairRow] = field(default_factory=list)
     steps: list[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(
         default_factory=list)
 
@@ -152,22 +155,21 @@ class Evaluation:
                                np.array(track_x), np.array(track_P)))
         self.pairs += _pair_rows(t, truth_ids, truth_x, track_x, track_P, res.rows, res.cols)
 
-    def joint_pairs(self, series: list[dict[int, int | None]]) -> list[tuple[float, int, float, float, float]]:
+    def joint_pairs(self, series: Series) -> list[PairRow]:
         """The rows of `pairs` for the pairs of a truth -> track series over the kept steps
         (keep_steps), e.g. the trajectory GOSPA assignment (metrics.joint_associations):
         each truth scored against the track that follows it over the run, not against a
         neighbour's track that one scan's GOSPA pairs it with."""
-        out: list[tuple[float, int, float, float, float]] = []
+        out: list[PairRow] = []
         for (t, ti, tx, ki, kx, kP), step in zip(self.steps, series):
             col = {int(k): j for j, k in enumerate(ki)}
-            rc = [(r, col[trk]) for r, i in enumerate(ti.tolist())
-                  if (trk := step.get(int(i))) is not None and trk in col]
-            rows, cols = (np.array(v, dtype=np.intp) for v in zip(*rc)) if rc else (np.zeros(0, np.intp),) * 2
-            out += _pair_rows(t, ti, tx, kx, kP, rows, cols)
+            rc = np.array([(r, col[trk]) for r, i in enumerate(ti.tolist())
+                           if (trk := step.get(int(i))) is not None and trk in col],
+                          dtype=np.intp).reshape(-1, 2)
+            out += _pair_rows(t, ti, tx, kx, kP, rc[:, 0], rc[:, 1])
         return out
 
-    def after(self, settle: float, series: list[dict[int, int | None]] | None = None
-              ) -> dict[int, np.ndarray]:
+    def after(self, settle: float, series: Series | None = None) -> dict[int, np.ndarray]:
         """Per truth id, rows (t, nees_pos, nees_state, sq_err) of the pairs made at
         least `settle` seconds after that truth was first paired: the per-step GOSPA
         pairs, or those of `series` (`joint_pairs`)."""
@@ -205,8 +207,7 @@ class TargetScore:
 
 
 def _pair_rows(t: float, truth_ids: np.ndarray, truth_x: np.ndarray, track_x: np.ndarray,
-               track_P: np.ndarray, rows: np.ndarray, cols: np.ndarray
-               ) -> list[tuple[float, int, float, float, float]]:
+               track_P: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> list[PairRow]:
     """(t, truth id, position NEES, state NEES, squared position error) of the pairs
     (truth row, track column)."""
     e = track_x[cols] - truth_x[rows]
@@ -214,12 +215,13 @@ def _pair_rows(t: float, truth_ids: np.ndarray, truth_x: np.ndarray, track_x: np
     n_pos = nees(e[:, POS], Pm[:, POS][:, :, POS])
     n_all = nees(e, Pm)
     d2 = np.sum(e[:, POS] ** 2, axis=1)
-    return [(t, int(truth_ids[r]), float(a), float(b), float(d)) for r, a, b, d in zip(rows, n_pos, n_all, d2)]
+    return [(t, int(truth_ids[r]), float(a), float(b), float(d))
+            for r, a, b, d in zip(rows, n_pos, n_all, d2)]
 
 
 def score_targets(
     ev: Evaluation, tx: np.ndarray, rx: np.ndarray, info: np.ndarray, q: float, q_z: float,
-    P0: np.ndarray, settle: float, series: list[dict[int, int | None]] | None = None,
+    P0: np.ndarray, settle: float, series: Series | None = None,
 ) -> dict[int, TargetScore]:
     """RMSE against the PCRLB and NEES, per truth id, `settle` s after first pairing (the
     per-step GOSPA pairs, or those of `series`: Evaluation.after)."""
