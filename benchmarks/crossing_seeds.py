@@ -245,7 +245,10 @@ and two resolved truths could share one, which made 267 above a swap run althoug
 number changed target. Same trackers, seeds 1-160 / 161-320:
   GNN: 38 -> 37 swap runs (cross_turn 112 no longer one: the same pattern as 267; every
        other failing seed the same), break runs the same counts (cross_eq 1, cross_turn 4,
-       cross_slow 2, 1dpm_uneq 1, hold5 1);
+       cross_slow 2, 1dpm_uneq 1, hold5 1); seeds 161-320 (first run, one-to-one only):
+       17 swap runs (cross_uneq 175; cross_turn 209, 218, 241, 242, 267; cross_slow 181,
+       194, 320; 2dpm_uneq 186, 256, 286; 4dpm_eq 176, 221, 297, 302; 4dpm_uneq 176),
+       sonar_hold5 1 (259), break runs cross_turn 267, cross_slow 189, 320, hold5 167;
   MHT: 0 -> 0 / 2 -> 1 swap runs (4dpm_eq 267 gone; 4dpm_uneq 169 stays: two tracks on
        T1, the scorer's pick between them at t = 250, then the re-link), break runs the
        same seeds; false tracks <= 0.02 per 100 cycles, RMSE 0.38-0.57 deg.
