@@ -11,9 +11,10 @@ independent. The other acceptance points are checked on every run.
 
 No timing may change the result: global fusion waits up to 120 s of wall time for a base
 (`max_wait`, as tests/integration/test_dense300_integration.py) instead of 3 s. With 3 s,
-one fresh-clone run on a machine with a third CPU-bound process (2026-11-26) fused some
-cycles of the crossing run 15 without a lagging base and lost truth 1's track at t = 17;
-the in-process chain on the same seed keeps one track per target throughout."""
+one fresh-clone run on a machine with a third CPU-bound process (2026-11-26) lost truth
+1's track in the crossing run 15 at t = 17, while the in-process chain on the same seed
+keeps one track per target throughout; a base declared stale under that load is the
+likely cause (not established: the run's logs were not kept)."""
 
 from __future__ import annotations
 
