@@ -20,7 +20,16 @@ SCENARIOS = REPO / "scenarios"
 
 TIMEOUT_S = 120.0
 
-__all__ = ["REPO", "ROOT", "SCENARIOS", "TIMEOUT_S", "Deployment", "Terminal"]
+__all__ = ["REPO", "ROOT", "SCENARIOS", "TIMEOUT_S", "Deployment", "Terminal", "patient_scene"]
+
+
+def patient_scene(tmp_path: Path, name: str) -> Path:
+    """A copy of scenarios/<name>.toml whose global fusion waits up to 120 s of wall time
+    for a base ([radar.fusion] max_wait) instead of 3 s: a base lagging on a loaded
+    machine is never fused without, so no timing changes the result."""
+    scene = tmp_path / f"{name}.toml"
+    scene.write_text((SCENARIOS / scene.name).read_text() + "\n[radar.fusion]\nmax_wait = 120.0\n")
+    return scene
 
 
 class Terminal:

@@ -133,9 +133,9 @@ class MixtureFilter:
         stationary probabilities, pruned (band_prune_init) and merged."""
         M = self.mu0.size
         xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
-        mu = global_mixture.prune_merge((wb[:, :, None] * self.mu0).reshape(wb.shape[0], -1),
-                                        xm, Pm, self.A, self.p.band_prune_init, self.p.band_merge,
-                                        self.p.band_linear, self.rx[0, 2])
+        w = (wb[:, :, None] * self.mu0).reshape(wb.shape[0], xm.shape[1])  # also for 0 tracks
+        mu = global_mixture.prune_merge(w, xm, Pm, self.A, self.p.band_prune_init,
+                                        self.p.band_merge, self.p.band_linear, self.rx[0, 2])
         return xm, Pm, mu
 
     def locate(self, xl: np.ndarray, Pl: np.ndarray, cl: np.ndarray, multi: np.ndarray,

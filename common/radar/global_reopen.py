@@ -81,10 +81,10 @@ def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndar
     if s.size == 0:
         return s
     xb, Pb, wb = altitude_bands(x[s][:, POS], E.y, E.R, E.base, rows, tx, rx, p, evidence=True)
-    nx, nP, nc = filt.initial(xb, Pb, wb)
+    k = contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
+    s, (nx, nP, nc) = s[k], filt.initial(xb[k], Pb[k], wb[k])
     cx, cP = imm.combine(nc, nx, nP)
-    resolved = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])
-    bad = resolved & contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
-    s = s[bad]
-    xm[s], Pm[s], c[s], x[s], P[s] = nx[bad], nP[bad], nc[bad], cx[bad], cP[bad]
+    ok = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])  # resolved
+    s = s[ok]
+    xm[s], Pm[s], c[s], x[s], P[s] = nx[ok], nP[ok], nc[ok], cx[ok], cP[ok]
     return s

@@ -37,7 +37,7 @@ from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.radar.global_fusion import FusionParams
 from common.sim.scenario import radar_scene
 from common.wire.sim_messages import truth_state
-from tests.harness import SCENARIOS, Deployment
+from tests.harness import SCENARIOS, Deployment, patient_scene
 
 SCENE = SCENARIOS / "dense300.toml"
 WARMUP = 30.0
@@ -45,8 +45,7 @@ WARMUP = 30.0
 
 @pytest.mark.slow
 def test_dense300_quality_goals(tmp_path: Path) -> None:
-    scene = tmp_path / SCENE.name
-    scene.write_text(SCENE.read_text() + "\n[radar.fusion]\nmax_wait = 120.0\n")
+    scene = patient_scene(tmp_path, SCENE.stem)
     cfg = load(scene)
     with Deployment(tmp_path) as d:
         d.collect("radar/gtracks")

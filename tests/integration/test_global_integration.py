@@ -35,7 +35,7 @@ from common.sim.simulator import run_scenario
 from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from common.evaluation.pcrlb import base_information
 from common.sim.scenario import radar_scene
-from tests.harness import SCENARIOS, Deployment
+from tests.harness import Deployment, patient_scene
 
 SETTLE = 30.0  # s after a target's first global track before RMSE / NEES count
 RUNS = 16  # Monte Carlo runs (seeds 1 .. RUNS)
@@ -135,8 +135,7 @@ def score_run(cfg, gtracks: list[dict], truth: list[dict], etracks: dict[str, li
 
 def monte_carlo(name: str, tmp_path: Path) -> MonteCarlo:
     """The processes on RUNS runs of a scenario, scored per run."""
-    scn = tmp_path / f"{name}.toml"
-    scn.write_text((SCENARIOS / scn.name).read_text() + "\n[radar.fusion]\nmax_wait = 120.0\n")
+    scn = patient_scene(tmp_path, name)
     cfg = load(scn)
     gtracks, truth, etracks = run_chain(tmp_path, scn)
     period = cfg.doc["sim"]["n_scans"] * cfg.doc["sim"]["scan_period"] + GAP
