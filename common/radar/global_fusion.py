@@ -23,8 +23,8 @@ Cycle at t (001 figure 7):
     free elementary tracks of non-contributing bases, including to tracks in pure
     prediction (resolution loop); a base whose elementary tracks of two tracks pass
     [48] against each other's track is not used by either this scan
-    (global_assoc.ambiguous_members says why); a confirmed track that lost a member and
-    that its sound members contradict is rebuilt (common.radar.global_reopen);
+    (global_assoc.ambiguous_members says why); a confirmed track that lost a member is
+    rebuilt or floored by its sound members (common.radar.global_reopen);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
     [46]); candidates that can be extended to more bases win conflicts, then lower
     residual; a candidate's conflicts include the elementary tracks of the other bases
@@ -119,7 +119,7 @@ class FusionParams(InitParams):
         doc, "Seed path"): module 62's blocks [36]-[41] without altitude prior,
         [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
         and IMM parameters are then unused.
-    reopen_altitude: rebuild a contradicted track (common.radar.global_reopen; "mixture").
+    reopen_altitude: rebuild a contradicted track, floor an open one (global_reopen; "mixture").
     """
 
     gate_prob: float = 0.999

@@ -1,5 +1,6 @@
-"""A track rebuilt from its sound members when they contradict it (complement of 001
-module 63, stated).
+"""A track rebuilt from its sound members when they contradict it, or its vertical
+variances floored at theirs when they leave the altitude open (complement of 001 module
+63, stated).
 
 001's module 63 dissociates an elementary track that fails [48] and goes on with the
 global track's estimate. With one receiver the altitude is the weakest coordinate: a
@@ -26,7 +27,18 @@ rebuild from it loses the track; measured, dense1000 seed 2: a track rebuilt wit
 sigma_z 1.8 km lost its members and left a ghost at 20 km holding a neighbour's
 elementary tracks, mean NEES 3.67 -> 5.40), and (2) the track's predicted position lies
 outside every band of weight >= 1e-3 at gate_prob (chi-square, 3 dof, on the position
-with both covariances). Otherwise nothing changes: a member lost to a manoeuvre, a
+with both covariances). When the bands leave the altitude open (condition 1 fails),
+the track keeps its mean but its altitude and vertical-velocity variances are floored at
+the mixture's (`floor_vertical`): the information of a lost member may have been a
+foreign aircraft's, and the EKF's altitude information from bistatic ranges grows with
+the height it is linearised at, so a track started high on a wrong combination credits
+itself several times the information its own members give (measured, dense1000 seed 7:
+aircraft 915 tracked at 3.2-4.0 km, truth 5.8 km, sigma_z 170-260 m, after dropping the
+foreign elementary track of base b1, its bases b0, b2 and b3 giving a flat evidence;
+seed 2: aircraft 671 at 7.2 km, truth 1.3 km, descending through the truth and below
+ground on a vertical velocity of -70 m/s that the dropped members had given it; per-target
+mean NEES 2186 and 617). Floored, the track's own elementary track of the lost base passes
+[48] again and locates it. Otherwise nothing changes: a member lost to a manoeuvre, a
 crossing or a track's end, with the others agreeing, costs no information. The rebuilt
 track is not updated in that cycle (as a new track is not): its members' estimates
 already hold the scan. Measured (benchmarks/dense_scale.py, dense1000 seeds 1-10): 0-9
@@ -67,13 +79,24 @@ def contradicted(x: np.ndarray, P: np.ndarray, xb: np.ndarray, Pb: np.ndarray, w
     return np.all((d2 > gate) | (wb < w_min), axis=1)
 
 
+def floor_vertical(P: np.ndarray, Pm: np.ndarray, slots: np.ndarray, Pmix: np.ndarray) -> None:
+    """Altitude and vertical-velocity variances of `slots`, in the moments P and in every
+    component of Pm, raised to at least those of the sound members' mixture Pmix (n, 6, 6)
+    (module doc: the track holds no more vertical information than its evidence)."""
+    for i in (4, 5):
+        v = Pmix[:, i, i]
+        Pm[slots, :, i, i] += np.maximum(0.0, v[:, None] - Pm[slots, :, i, i])
+        P[slots, i, i] += np.maximum(0.0, v - P[slots, i, i])
+
+
 def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndarray, ...],
            row: np.ndarray, E: ETrackSet, tx: np.ndarray, rx: np.ndarray, p: InitParams,
            gate_prob: float) -> np.ndarray:
-    """Rebuild, in place in the predicted (x, P, xm, Pm, c) (MixtureFilter.predict), the
-    mixture of each of `candidates` (confirmed tracks that lost a member this cycle) with
-    at least MIN_SOUND sound members whose evidence-weighted altitude bands resolve the
-    altitude and contradict its prediction (module doc); returns the rebuilt slots."""
+    """In place in the predicted (x, P, xm, Pm, c) (MixtureFilter.predict) of each of
+    `candidates` (confirmed tracks that lost a member this cycle) with at least MIN_SOUND
+    sound members: rebuild the mixture when their evidence-weighted altitude bands
+    resolve the altitude and contradict its prediction, floor its vertical variances
+    when the bands leave the altitude open (module doc); returns the rebuilt slots."""
     x, P, xm, Pm, c = predicted
     rows = sound_members(row[candidates], E)
     enough = (rows >= 0).sum(axis=1) >= MIN_SOUND
@@ -81,10 +104,11 @@ def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndar
     if s.size == 0:
         return s
     xb, Pb, wb = altitude_bands(x[s][:, POS], E.y, E.R, E.base, rows, tx, rx, p, evidence=True)
-    k = contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
-    s, (nx, nP, nc) = s[k], filt.initial(xb[k], Pb[k], wb[k])
+    nx, nP, nc = filt.initial(xb, Pb, wb)
     cx, cP = imm.combine(nc, nx, nP)
     ok = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])  # resolved
-    s = s[ok]
-    xm[s], Pm[s], c[s], x[s], P[s] = nx[ok], nP[ok], nc[ok], cx[ok], cP[ok]
+    floor_vertical(P, Pm, s[~ok], cP[~ok])
+    k = ok & contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
+    s = s[k]
+    xm[s], Pm[s], c[s], x[s], P[s] = nx[k], nP[k], nc[k], cx[k], cP[k]
     return s

@@ -1,7 +1,8 @@
 """Tests of the altitude re-opened after a lost member (common.radar.global_reopen): a
 track held at a wrong altitude with a small variance (dense1000 seed 7, aircraft 931)
 is rebuilt from its sound members and then admits its own elementary track of the base
-it had lost; a track its members agree with keeps its state."""
+it had lost; when they leave the altitude open its vertical variances are floored at
+theirs; a track its members agree with keeps its state."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from common.radar.bistatic import POS, project
 from common.radar.global_assoc import ETrackSet, component_gate
 from common.radar.global_filter import MixtureFilter
 from common.radar.global_fusion import FusionParams
-from common.radar.global_reopen import contradicted, reopen, sound_members
+from common.radar.global_reopen import contradicted, floor_vertical, reopen, sound_members
 from common.core.gating import chi2_gate
 from common.radar.localisation import Constraints, gauss_newton
 
@@ -106,13 +107,35 @@ def test_fewer_than_three_sound_members_rebuild_nothing() -> None:
     assert slots.size == 0
 
 
-def test_members_that_leave_the_altitude_open_rebuild_nothing() -> None:
+def test_members_that_leave_the_altitude_open_floor_its_vertical_variances() -> None:
     """Ranges ten times less accurate (sigma 400 m): the rebuilt bands contradict the
     track (z 7.5 km) but leave sigma_z at 2 km, above band_linear times the height; the
-    track keeps its state."""
+    track is not rebuilt, keeps its mean, and its altitude and vertical-velocity variances
+    (sigma 150 m and 3 m/s) rise to the bands' (floor_vertical), in every component: base
+    2's own elementary track, which failed [48] against it, then passes."""
     f = MixtureFilter(FusionParams(), TX, RXS)
     E = _etracks(np.ones(B, dtype=bool), R1 * np.diag([100.0, 1.0, 1.0]))
     pred = _predicted(f, _etracks(np.ones(B, dtype=bool)), 7500.0)
+    before = [a.copy() for a in pred]
+    b2 = (E.y[2:3], E.R[2:3], TX[2:3], RXS[2:3])
+    assert not component_gate(pred[4], pred[2], pred[3], *b2, GAMMA)[0]
     slots = reopen(np.array([0]), f, pred, np.array([[0, 1, -1, 3]]), E, TX, RXS,
                    FusionParams(), 0.999)
     assert slots.size == 0
+    x, P, xm, Pm, c = pred
+    np.testing.assert_array_equal(x, before[0])
+    np.testing.assert_array_equal(xm, before[2])
+    assert np.sqrt(P[0, 4, 4]) > 1000.0 and np.sqrt(P[0, 5, 5]) > 3.0
+    assert np.all(np.sqrt(Pm[0, :, 4, 4]) > 1000.0)
+    np.testing.assert_array_equal(P[0, :4, :4], before[1][0, :4, :4])
+    assert component_gate(c, xm, Pm, *b2, GAMMA)[0]
+
+
+def test_floor_vertical_never_lowers_a_variance() -> None:
+    P = np.diag([1.0, 1.0, 1.0, 1.0, 400.0, 1.0])[None]
+    Pm = np.tile(P, (1, 2, 1, 1))
+    Pm[0, 1, 4, 4] = 900.0
+    floor_vertical(P, Pm, np.array([0]), np.diag([0, 0, 0, 0, 625.0, 4.0])[None])
+    np.testing.assert_array_equal(np.diag(P[0]), [1, 1, 1, 1, 625, 4])
+    np.testing.assert_array_equal(Pm[0, :, 4, 4], [625, 900])
+    np.testing.assert_array_equal(Pm[0, :, 5, 5], [4, 4])
