@@ -44,8 +44,8 @@ Cycle at t (001 figure 7):
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table), a
-    removed confirmed track's number held for the track that takes its elementary
-    tracks (common.radar.global_succession). A track whose contributors were reported
+    removed or orphaned confirmed track's number held for the track that takes its
+    elementary tracks (common.radar.global_succession). A track whose contributors were reported
     but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
     its status, unless none was updated at its base for `coast_cycles` cycles
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
@@ -248,8 +248,7 @@ class GlobalFusion:
         gated_component_pairs says why), -1 where none or base not reported; and the
         slots that lost a member (here, or by module 64's v_b test last cycle; global_reopen)."""
         tab = self.table
-        B = len(self.base_ids)
-        row = np.full((tab.capacity, B), -1, dtype=np.intp)
+        row = np.full((tab.capacity, len(self.base_ids)), -1, dtype=np.intp)
         s, b = np.nonzero(tab.has[live] & reported[None, :])
         s = live[s]
         keys = E.base * (1 << 40) + E.id
@@ -261,6 +260,7 @@ class GlobalFusion:
         ok[sel] = component_gate(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
                                  self.tx[b[sel]], self.rx[b[sel]], self.gamma_max)  # [48]
         tab.has[s[~ok], b[~ok]] = False  # dissociation
+        self.succession.dissociated(tab, s[sel[~ok[sel]]], b[sel[~ok[sel]]])  # by [48]
         row[s[ok], b[ok]] = r[ok]
         return row, np.union1d(s[~ok], live[tab.suspect[live]])
 
