@@ -40,7 +40,7 @@ ground on a vertical velocity of -70 m/s that the dropped members had given it; 
 mean NEES 2186 and 617). Floored, a track can admit its own elementary track of the lost
 base again: in seed 7, 840's track (3.5 km, truth 2.4 km) was floored at t = 14 s and
 took its own b1 track at t = 17 s (2.5 km from then on); 915's rose to 4.6-5.0 km and
-took its own at t = 70 s. Seeds 1-14: 150-215 floors per run, mean NEES 3.0-3.7 (seed 7
+took its own at t = 70 s. Seeds 1-14: 150-215 floors per run, mean NEES 2.9-3.7 (seed 7
 5.19 -> 3.15, seed 2 3.65 -> 3.04), no switch count higher (docs/radar_at_scale.md,
 session 14). Otherwise nothing changes: a member lost to a manoeuvre, a
 crossing or a track's end, with the others agreeing, costs no information. The rebuilt
