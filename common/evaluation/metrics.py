@@ -109,13 +109,19 @@ class SwitchCounts:
     half: int
 
 
-def count_switches(series: Sequence[Mapping[int, int | None]]) -> SwitchCounts:
+def count_switches(series: Sequence[Mapping[int, int | None]], start: int = 0) -> SwitchCounts:
     """Count switches and breaks; series[k] maps each truth present at step k to its
-    assigned track number, or None when it is unassigned (absent truths are omitted)."""
+    assigned track number, or None when it is unassigned (absent truths are omitted).
+    Only the events of steps >= start are counted (the earlier steps set the state: a
+    warm-up)."""
     last_track: dict[int, int] = {}
     switches = breaks = full = half = 0
     prev: Mapping[int, int | None] = {}
-    for step in series:
+    for k, step in enumerate(series):
+        if k < start:
+            last_track.update({i: tr for i, tr in step.items() if tr is not None})
+            prev = step
+            continue
         for truth, track in step.items():
             if truth in prev:
                 before = prev[truth]

@@ -69,6 +69,14 @@ def test_swap_between_two_truths_counts_one_switch_per_truth():
     assert c == SwitchCounts(switches=2, breaks=0, full=2, half=0)
 
 
+def test_events_before_start_are_not_counted_but_set_the_state():
+    series = [{1: 7, 2: 5}, {1: 8, 2: None}, {1: 8, 2: 9}, {1: 9, 2: 9}]
+    assert count_switches(series) == SwitchCounts(switches=3, breaks=1, full=2, half=2)
+    # from step 2: truth 2's new number after the gap (5 -> 9) and truth 1's 8 -> 9
+    assert count_switches(series, start=2) == SwitchCounts(switches=2, breaks=0, full=1, half=1)
+    assert count_switches(series, start=4) == SwitchCounts(0, 0, 0, 0)
+
+
 def test_breaks():
     assert count_switches([{1: 7}, {1: None}, {1: 7}]) == SwitchCounts(0, 1, 0, 2)
     assert count_switches([{1: 7}, {1: None}, {1: 8}]) == SwitchCounts(1, 1, 0, 2)
