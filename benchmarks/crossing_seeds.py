@@ -252,6 +252,27 @@ number changed target. Same trackers, seeds 1-160 / 161-320:
   MHT: 0 -> 0 / 2 -> 1 swap runs (4dpm_eq 267 gone; 4dpm_uneq 169 stays: two tracks on
        T1, the scorer's pick between them at t = 250, then the re-link), break runs the
        same seeds; false tracks <= 0.02 per 100 cycles, RMSE 0.38-0.57 deg.
+Split-off rates (2026-11-26, session 14; common.sonar.mht `_split`, mht_hypotheses
+`fresh_rates`): 000 splits a track's second hypothesis off as it is, with the bearing rate
+of the track it leaves, which the measurement that made it does not observe (4dpm_uneq
+169: #30 split off at T2's bearing with T1's +3.4 deg/min). Reset to a new track's rates
+(000 x = H' z, P0: rate 0, P0's variance; bearing and level kept) on every split-off:
+seeds 1-160 the table above to the digit; seeds 161-320 169 fixed (#30 split off at
++0.0 +- 2.1 deg/min, confirmed at -0.12, followed T2 through the crossing), but
+hold_cross_eq 304 a new swap run: #6's heaviest hypothesis jumped to T2 (+5.8 deg/min)
+and the split-off was the one continuing T1 (its rate +1.5, T1's); reset, it wandered
+(+12 deg/min) and never confirmed, and the pair coalesced on T1 until t = 655 s, after
+the truths resolved. Kept: the reset only for a split-off that departs from its
+prediction more than the track's heaviest hypothesis from its own (d^2 in bearing and
+level; seeds 161-200, it fired on 12 of 12 split-offs on 4dpm_uneq, 6 of 6 on 2dpm_eq,
+8 of 11 on 1dpm_uneq). MHT, seeds 1-160: every scene as before (0 swap runs; break
+runs, false tracks, RMSE identical); seeds 161-320:
+swap runs 1 -> 0 (4dpm_uneq 169 fixed, none new), break runs the same (cross_slow 198,
+208, 252, hold5 281), false tracks the same, RMSE the same but 4dpm_uneq 0.55 -> 0.54
+deg. The rule was shaped on 304 after seeing it; on seeds 321-480 (not looked at),
+the six sonar_cross_* scenes alone, before and after alike: 0 swap runs, 0 break runs,
+false tracks 0.01-0.02 per 100 cycles, RMSE 0.38-0.56 deg, every scene to the digit (no
+evidence either way there; the hold_cross_* scenes were not run on those seeds).
 """
 
 from __future__ import annotations

@@ -38,7 +38,18 @@ Deviations (stated):
 - A track split off starts tentative (SA = ZA = 0; the seed lets it inherit the status
   of its track: a confirmed split-off of a clutter hypothesis was a confirmed false
   track, and a duplicate of the target until the SPRT removed it) and shares the
-  register of its track up to the split.
+  register of its track up to the split. When its one hypothesis departs from its
+  prediction more than the track's heaviest from its own (d^2 in bearing and level:
+  it took a measurement off the track's prediction), it keeps that bearing and level
+  (mean and covariance) but takes the rates of a new track, 000 x = H' z, P0: rate 0
+  with P0's variance, uncorrelated. The seed splits the hypothesis as it is ("con solo
+  una hipotesis"): its rates are the track's, which the measurement that made it does
+  not observe (sonar_cross_4dpm_uneq seed 169: a split-off on the weak target kept the
+  strong one's rising rate, confirmed at +2.80 +- 0.44 deg/min against the target's
+  -2.0, and coalesced with its track in the crossing). A split-off that continues the
+  prediction better than the heaviest (the heaviest jumped to another source) keeps
+  the track's rates, which are its target's (sonar_hold_cross_eq seed 304: reset, such
+  a split-off lost its target and the pair coalesced on the other).
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
   implemented as track i continuing with omega's hypotheses and state of this cycle (its
   number and register kept, its own hypotheses dropped) and omega removed. The seed
@@ -78,9 +89,9 @@ from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearin
 from common.sonar.bearing_model import detection_probability, measurement_matrix
 from common.sonar.bearing_tracker import Cycle, TrackerParams, detection_measurements
 from common.sonar.mht_models import branch
-from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
-                                         miss_weights, mixture_moments, pair_distance2, prune,
-                                         sprt, track_sums)
+from common.sonar.mht_hypotheses import (LN_2PI, fresh_rates, heaviest, hit_weights, merge_apply,
+                                         merge_clusters, miss_weights, mixture_moments,
+                                         pair_distance2, prune, sprt, state_diff, track_sums)
 from common.sonar.mht_tracks import (TrackArrays, conflict_flags, duplicates, relink,
                                      resolve_conflicts)
 from common.sonar.multiline import NEW
@@ -233,7 +244,7 @@ class MhtTracker:
         keep = prune(cc, ct, nT, mp.c_krit, mp.max_hyp_track, mp.max_hyp_cycle)  # 000 c < c_krit
         cx, cP, cc, ct, cpar, cmeas = cx[keep], cP[keep], cc[keep], ct[keep], cpar[keep], cmeas[keep]
         cm = cm[keep]
-        ct = self._split(cx, cP, cc, ct)  # 000 split, may add tracks
+        cx, cP, ct = self._split(cx, cP, cc, ct, xp[cpar], Pp[cpar])  # 000 split, may add tracks
         head = merge_clusters(cx, cP, cc, ct * self.sojourn.size + cm, mp.d_merge_hyp)  # 000 merge
         heads, cx, cP, cc = merge_apply(cx, cP, cc, head)
         ct, cpar, cmeas, cm = ct[heads], cpar[heads], cmeas[heads], cm[heads]
@@ -317,11 +328,9 @@ class MhtTracker:
         k = z.shape[0]
         if k == 0:
             return
-        p = self.params
-        rates = [p.init_brg_rate_sigma, p.init_amp_rate_sigma, p.init_freq_rate_sigma][: self.m]
         var = np.empty((k, self.n))
         var[:, 0::2] = Rd
-        var[:, 1::2] = np.square(rates)
+        var[:, 1::2] = self._rate_var()
         slots = self.tr.add(k, self.k)
         self.hx = np.concatenate([self.hx, z @ self.H])  # 000 x = H' z
         self.hP = np.concatenate([self.hP, _diag(var)])  # 000 P0
@@ -330,9 +339,18 @@ class MhtTracker:
         self.hmeas = np.concatenate([self.hmeas, np.full(k, -1, dtype=np.intp)])
         self.hm = np.concatenate([self.hm, np.zeros(k, dtype=np.intp)])
 
-    def _split(self, x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray) -> np.ndarray:
+    def _rate_var(self) -> np.ndarray:
+        """Variances of the rate components of 000 P0 (bearing, amplitude, frequency rate)."""
+        p = self.params
+        return np.square([p.init_brg_rate_sigma, p.init_amp_rate_sigma, p.init_freq_rate_sigma][: self.m])
+
+    def _split(self, x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray,
+               x_pre: np.ndarray, P_pre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """000 track split: when the two heaviest hypotheses of a track are farther than
-        d_split, the lighter becomes a track of its own; returns the new track index."""
+        d_split, the lighter becomes a track of its own; when it departs from its
+        prediction x_pre, P_pre more than the heaviest from its own (`_departure`), its
+        rates are those of a new track (`fresh_rates`, deviation: see the module
+        docstring); returns x, P and the new track index."""
         nT = self.tr.size
         h1 = heaviest(c, track, nT)
         c2 = c.copy()
@@ -340,18 +358,21 @@ class MhtTracker:
         h2 = heaviest(c2, track, nT)
         both = np.flatnonzero((h1 >= 0) & (h2 >= 0) & np.isfinite(c2[np.maximum(h2, 0)]))
         if both.size == 0:
-            return track
+            return x, P, track
         a, b = h1[both], h2[both]
         far = pair_distance2(x[a], P[a], x[b], P[b]) > self.mp.d_split**2  # 000 d^2 > d_split^2
         if not far.any():
-            return track
+            return x, P, track
         src = both[far]
         slots = self.tr.split(src, self.k)
         for s_old, s_new in zip(src, slots):
             self.retro.inherit(int(self.tr.uid[s_new]), int(self.tr.uid[s_old]), self.t_cycle)
         track = track.copy()
         track[b[far]] = slots
-        return track
+        off = b[far][_departure(x, x_pre, P_pre, b[far]) > _departure(x, x_pre, P_pre, a[far])]
+        x, P = x.copy(), P.copy()
+        x[off], P[off] = fresh_rates(x[off], P[off], self._rate_var())
+        return x, P, track
 
     def _merge_tracks(self) -> np.ndarray:
         """000 track merge: a confirmed and a tentative track closer than d_merge, with
@@ -390,6 +411,14 @@ class MhtTracker:
             return None
         smoothed = {f"{c}_retro": v for c, v in self.retro.smoothed(track_id).items()}
         return status, {**self.retro.rows(track_id), **smoothed}
+
+
+def _departure(x: np.ndarray, x_pre: np.ndarray, P_pre: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """d^2 of hypotheses h from their predictions in the measured components (bearing,
+    level, frequency): (x - x^pre)' P^pre^-1 (x - x^pre), 0 for a missed detection."""
+    d = state_diff(x[h], x_pre[h])[:, 0::2]
+    S = P_pre[h][:, 0::2, 0::2]
+    return np.einsum("ki,ki->k", d, np.linalg.solve(S, d[..., None])[..., 0])
 
 
 def _diag(v: np.ndarray) -> np.ndarray:

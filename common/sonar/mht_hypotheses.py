@@ -55,6 +55,20 @@ def miss_weights(c_rel: np.ndarray, p_d: np.ndarray) -> np.ndarray:
     return c_rel * (1.0 - p_d)  # 000 c_ih, alpha = 0
 
 
+def fresh_rates(x: np.ndarray, P: np.ndarray, rate_var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hypotheses x (K, n), P (K, n, n) with their rate components (the odd state
+    components: bearing rate, amplitude rate, frequency rate) those of a new track, 000
+    x = H' z, P0 (rate 0, variance rate_var (n/2,), uncorrelated); the measured
+    components keep their mean and covariance block."""
+    x, P = x.copy(), P.copy()
+    x[:, 1::2] = 0.0
+    P[:, 1::2, :] = 0.0
+    P[:, :, 1::2] = 0.0
+    i = np.arange(1, x.shape[1], 2)
+    P[:, i, i] = rate_var
+    return x, P
+
+
 def track_sums(c: np.ndarray, track: np.ndarray, n_tracks: int) -> np.ndarray:
     """000 c_i = sum_j c_ij per track (also LR_i = sum_h c_ih)."""
     return np.bincount(track, weights=c, minlength=n_tracks)

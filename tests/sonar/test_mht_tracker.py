@@ -158,14 +158,41 @@ def test_split_the_lighter_of_two_far_hypotheses_into_a_tentative_track():
     x = np.array([[1.0, 0, 20, 0], [1.0 + 0.5 * DEG, 0, 20, 0], [1.2, 0, 20, 0]])
     P = np.stack([np.diag([DEG**2, 1e-8, 1.0, 1e-3])] * 3)
     c = np.array([0.5, 0.3, 0.2])
-    track = trk._split(x, P, c, np.zeros(3, dtype=np.intp))
+    _, _, track = trk._split(x, P, c, np.zeros(3, dtype=np.intp), x, P)
     # the two heaviest (0.5, 0.3) are 0.35 sigma apart: no split
     assert track.tolist() == [0, 0, 0] and trk.tr.size == 1
     c = np.array([0.5, 0.2, 0.3])
-    track = trk._split(x, P, c, np.zeros(3, dtype=np.intp))
+    _, _, track = trk._split(x, P, c, np.zeros(3, dtype=np.intp), x, P)
     # now the second heaviest is 11 deg away (d^2 > d_split^2): it becomes track 2
     assert track.tolist() == [0, 0, 1] and trk.tr.uid.tolist() == [1, 2]
     assert trk.tr.SA.tolist() == [0, 0] and trk.retro._inherits == {2: (1, 0.0)}
+
+
+def test_a_split_off_departing_from_its_prediction_takes_the_rates_of_a_new_track():
+    trk = tracker()
+    trk.step(0.0, np.array([1.0]), np.array([100.0]), 0.0)
+    x = np.array([[1.0, 3e-4, 20, 0.01], [1.2, 3e-4, 14, 0.01]])  # both with the track's rates
+    C = np.array([[DEG**2, 2e-10, 0, 0], [2e-10, 1e-8, 0, 0], [0, 0, 1.0, 0.01], [0, 0, 0.01, 1e-3]])
+    P, pre = np.stack([C, C]), x[[0, 0]]  # both predicted at the track's 1.0 rad
+    xs, Ps, track = trk._split(x, P, np.array([0.6, 0.4]), np.zeros(2, dtype=np.intp), pre, P)
+    assert track.tolist() == [0, 1]  # 11 deg apart: the lighter is split off
+    np.testing.assert_array_equal(xs[0], x[0])  # the track's own hypothesis untouched
+    np.testing.assert_array_equal(Ps[0], C)
+    np.testing.assert_allclose(xs[1], [1.2, 0.0, 14, 0.0])  # 000 x = H' z in the rates
+    want = np.diag([DEG**2, 6e-4**2, 1.0, 0.05**2])  # P0 in the rates, no correlation
+    np.testing.assert_allclose(Ps[1], want)
+
+
+def test_a_split_off_continuing_its_prediction_keeps_its_rates():
+    trk = tracker()
+    trk.step(0.0, np.array([1.0]), np.array([100.0]), 0.0)
+    x = np.array([[1.0, 3e-4, 20, 0.01], [1.2, 3e-4, 14, 0.01]])
+    C = np.array([[DEG**2, 2e-10, 0, 0], [2e-10, 1e-8, 0, 0], [0, 0, 1.0, 0.01], [0, 0, 0.01, 1e-3]])
+    P, pre = np.stack([C, C]), x[[1, 1]]  # predicted at 1.2 rad: the heaviest jumped away
+    xs, Ps, track = trk._split(x, P, np.array([0.6, 0.4]), np.zeros(2, dtype=np.intp), pre, P)
+    assert track.tolist() == [0, 1]
+    np.testing.assert_array_equal(xs, x)
+    np.testing.assert_array_equal(Ps, P)
 
 
 def test_gate_equals_the_exact_test_of_every_pair_with_its_own_r():
