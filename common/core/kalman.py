@@ -103,3 +103,11 @@ def ekf_update(
     """
     # 001 [58]-[62]
     return update(x, P, innovation(z, h, angle_idx), H, R, joseph, gain_scale)
+
+
+def diagonal_covariances(v: np.ndarray) -> np.ndarray:
+    """Batch of diagonal covariance matrices (K, m, m) from their diagonals (K, m)."""
+    out = np.zeros(v.shape + (v.shape[-1],))
+    i = np.arange(v.shape[-1])
+    out[..., i, i] = v
+    return out

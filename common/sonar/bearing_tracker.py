@@ -50,7 +50,7 @@ from common.sonar.bearing_model import (
     thresholds,
 )
 from common.core.crossing import CrossingParams
-from common.core.kalman import predict, update
+from common.core.kalman import diagonal_covariances, predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
 from common.core.rejection import Rejected
@@ -239,7 +239,7 @@ class BearingTracker:
             keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
                                             rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
-        R = _diag(Rd[cols_])
+        R = diagonal_covariances(Rd[cols_])
 
         if idx.size and self.imm is not None:  # 000 x^(k/k) per model, combined
             tab.mu[idx], tab.xm[idx], tab.Pm[idx], x, P = self.imm.update(
@@ -305,7 +305,7 @@ class BearingTracker:
         var = np.empty((k, self.n))
         var[:, 0::2] = Rd
         var[:, 1::2] = np.square(rates)
-        tab.P[slots] = _diag(var)
+        tab.P[slots] = diagonal_covariances(var)
         tab.xm[slots] = tab.x[slots, None, :]
         tab.Pm[slots] = tab.P[slots, None]
         tab.mu[slots] = self.imm.mu0 if self.imm is not None else (1.0, 0.0)
@@ -351,14 +351,6 @@ class BearingTracker:
             return "confirmed", self.history.rows(int(tab.uid[slot]))
         uid = self.history.retired_uid(track_id)
         return None if uid is None else ("deleted", self.history.rows(uid))
-
-
-def _diag(v: np.ndarray) -> np.ndarray:
-    """Batch of diagonal matrices (K, m, m) from diagonals (K, m)."""
-    out = np.zeros(v.shape + (v.shape[-1],))
-    i = np.arange(v.shape[-1])
-    out[..., i, i] = v
-    return out
 
 
 def bearing_sigmas(p: TrackerParams, array_kind: str, sigma0: float, brg: np.ndarray,

@@ -38,18 +38,8 @@ Deviations (stated):
 - A track split off starts tentative (SA = ZA = 0; the seed lets it inherit the status
   of its track: a confirmed split-off of a clutter hypothesis was a confirmed false
   track, and a duplicate of the target until the SPRT removed it) and shares the
-  register of its track up to the split. When its one hypothesis departs from its
-  prediction more than the track's heaviest from its own (d^2 in bearing and level:
-  it took a measurement off the track's prediction), it keeps that bearing and level
-  (mean and covariance) but takes the rates of a new track, 000 x = H' z, P0: rate 0
-  with P0's variance, uncorrelated. The seed splits the hypothesis as it is ("con solo
-  una hipotesis"): its rates are the track's, which the measurement that made it does
-  not observe (sonar_cross_4dpm_uneq seed 169: a split-off on the weak target kept the
-  strong one's rising rate, confirmed at +2.80 +- 0.44 deg/min against the target's
-  -2.0, and coalesced with its track in the crossing). A split-off that continues the
-  prediction better than the heaviest (the heaviest jumped to another source) keeps
-  the track's rates, which are its target's (sonar_hold_cross_eq seed 304: reset, such
-  a split-off lost its target and the pair coalesced on the other).
+  register of its track up to the split; one that departs from its prediction more
+  than the track's heaviest takes a new track's rates (`mht_hypotheses.split_off_rates`).
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
   implemented as track i continuing with omega's hypotheses and state of this cycle (its
   number and register kept, its own hypotheses dropped) and omega removed. The seed
@@ -84,14 +74,14 @@ import numpy as np
 
 from common.core.angles import wrap_2pi
 from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
-from common.core.kalman import predict, update
+from common.core.kalman import diagonal_covariances, predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.bearing_model import detection_probability, measurement_matrix
 from common.sonar.bearing_tracker import Cycle, TrackerParams, detection_measurements
 from common.sonar.mht_models import branch
-from common.sonar.mht_hypotheses import (LN_2PI, fresh_rates, heaviest, hit_weights, merge_apply,
-                                         merge_clusters, miss_weights, mixture_moments,
-                                         pair_distance2, prune, sprt, state_diff, track_sums)
+from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
+                                         miss_weights, mixture_moments, pair_distance2, prune,
+                                         split_off_rates, sprt, track_sums)
 from common.sonar.mht_tracks import (TrackArrays, conflict_flags, duplicates, relink,
                                      resolve_conflicts)
 from common.sonar.multiline import NEW
@@ -224,7 +214,7 @@ class MhtTracker:
         nT = tr.size
         ci = track_sums(self.hc, self.ht, nT)
         c_rel = self.hc / ci[self.ht] if self.hc.size else self.hc
-        xu, Pu, _, _ = update(xp[hi], Pp[hi], y, H, _diag(Rd[lj]), joseph=True)
+        xu, Pu, _, _ = update(xp[hi], Pp[hi], y, H, diagonal_covariances(Rd[lj]), joseph=True)
         xu[:, 0] = wrap_2pi(xu[:, 0])
         d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
         detS = np.linalg.det(S)
@@ -318,7 +308,7 @@ class MhtTracker:
         d2max = mahalanobis_sq(Y, A + np.diag(Rd.max(axis=0)))
         hi, lj = np.nonzero(gate(d2max, lam2))
         y = Y[hi, lj]
-        S = A[hi] + _diag(Rd[lj])  # 000 S = H P^pre H' + R
+        S = A[hi] + diagonal_covariances(Rd[lj])  # 000 S = H P^pre H' + R
         d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
         ok = d2 < lam2  # 000 y' S^-1 y < lambda^2
         return hi[ok], lj[ok], y[ok], S[ok]
@@ -333,7 +323,7 @@ class MhtTracker:
         var[:, 1::2] = self._rate_var()
         slots = self.tr.add(k, self.k)
         self.hx = np.concatenate([self.hx, z @ self.H])  # 000 x = H' z
-        self.hP = np.concatenate([self.hP, _diag(var)])  # 000 P0
+        self.hP = np.concatenate([self.hP, diagonal_covariances(var)])  # 000 P0
         self.hc = np.concatenate([self.hc, np.ones(k)])
         self.ht = np.concatenate([self.ht, slots])
         self.hmeas = np.concatenate([self.hmeas, np.full(k, -1, dtype=np.intp)])
@@ -347,10 +337,8 @@ class MhtTracker:
     def _split(self, x: np.ndarray, P: np.ndarray, c: np.ndarray, track: np.ndarray,
                x_pre: np.ndarray, P_pre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """000 track split: when the two heaviest hypotheses of a track are farther than
-        d_split, the lighter becomes a track of its own; when it departs from its
-        prediction x_pre, P_pre more than the heaviest from its own (`_departure`), its
-        rates are those of a new track (`fresh_rates`, deviation: see the module
-        docstring); returns x, P and the new track index."""
+        d_split, the lighter becomes a track of its own, its rates by
+        `split_off_rates` (predictions x_pre, P_pre); returns x, P and the new track index."""
         nT = self.tr.size
         h1 = heaviest(c, track, nT)
         c2 = c.copy()
@@ -369,9 +357,7 @@ class MhtTracker:
             self.retro.inherit(int(self.tr.uid[s_new]), int(self.tr.uid[s_old]), self.t_cycle)
         track = track.copy()
         track[b[far]] = slots
-        off = b[far][_departure(x, x_pre, P_pre, b[far]) > _departure(x, x_pre, P_pre, a[far])]
-        x, P = x.copy(), P.copy()
-        x[off], P[off] = fresh_rates(x[off], P[off], self._rate_var())
+        x, P = split_off_rates(x, P, x_pre, P_pre, a[far], b[far], self._rate_var())
         return x, P, track
 
     def _merge_tracks(self) -> np.ndarray:
@@ -411,19 +397,3 @@ class MhtTracker:
             return None
         smoothed = {f"{c}_retro": v for c, v in self.retro.smoothed(track_id).items()}
         return status, {**self.retro.rows(track_id), **smoothed}
-
-
-def _departure(x: np.ndarray, x_pre: np.ndarray, P_pre: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """d^2 of hypotheses h from their predictions in the measured components (bearing,
-    level, frequency): (x - x^pre)' P^pre^-1 (x - x^pre), 0 for a missed detection."""
-    d = state_diff(x[h], x_pre[h])[:, 0::2]
-    S = P_pre[h][:, 0::2, 0::2]
-    return np.einsum("ki,ki->k", d, np.linalg.solve(S, d[..., None])[..., 0])
-
-
-def _diag(v: np.ndarray) -> np.ndarray:
-    """Batch of diagonal matrices (K, m, m) from diagonals (K, m)."""
-    out = np.zeros(v.shape + (v.shape[-1],))
-    i = np.arange(v.shape[-1])
-    out[..., i, i] = v
-    return out
