@@ -252,8 +252,8 @@ number changed target. Same trackers, seeds 1-160 / 161-320:
   MHT: 0 -> 0 / 2 -> 1 swap runs (4dpm_eq 267 gone; 4dpm_uneq 169 stays: two tracks on
        T1, the scorer's pick between them at t = 250, then the re-link), break runs the
        same seeds; false tracks <= 0.02 per 100 cycles, RMSE 0.38-0.57 deg.
-Split-off rates (2026-11-26, session 14; common.sonar.mht `_split`, mht_hypotheses
-`fresh_rates`): 000 splits a track's second hypothesis off as it is, with the bearing rate
+Split-off rates (2026-11-26, session 14; common.sonar.mht_hypotheses `split_off_rates`,
+called by mht `_split`): 000 splits a track's second hypothesis off as it is, with the bearing rate
 of the track it leaves, which the measurement that made it does not observe (4dpm_uneq
 169: #30 split off at T2's bearing with T1's +3.4 deg/min). Reset to a new track's rates
 (000 x = H' z, P0: rate 0, P0's variance; bearing and level kept) on every split-off:
