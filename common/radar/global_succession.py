@@ -41,8 +41,9 @@ from common.core.track_table import TrackTable
 
 
 @dataclass
-class Vacated:
-    """A removed confirmed track: cycle of removal, elementary members (B,), birth time."""
+class Held:
+    """A confirmed track whose number is held for its elementary tracks (removed, or an
+    orphan): cycle of the record, elementary members (B,) and which count, birth time."""
 
     cycle: int
     member: np.ndarray
@@ -57,8 +58,8 @@ class Succession:
     def __init__(self, keep: int, min_shared: int = 2) -> None:
         self.keep, self.min_shared = keep, min_shared
         self.cycle = 0
-        self.vacated: dict[int, Vacated] = {}  # slot -> the removed track
-        self.orphans: dict[int, Vacated] = {}  # slot -> the live track's lost members
+        self.vacated: dict[int, Held] = {}  # slot -> the removed track
+        self.orphans: dict[int, Held] = {}  # slot -> the live track's lost members
         self.cut: dict[int, np.ndarray] = {}  # slot -> bases dissociated this cycle
 
     def held(self) -> np.ndarray:
@@ -70,23 +71,23 @@ class Succession:
         elementary tracks, counting those dissociated this cycle (a track deleted after
         coasting holds none: its number is free at once), before the table removes them."""
         for s in slots.tolist():
-            held = tab.has[s] | self.cut.get(s, False)
+            members = tab.has[s] | self.cut.get(s, False)
             if s in self.orphans:
                 self.vacated[s] = self.orphans.pop(s)
-            elif tab.confirmed[s] and held.sum() >= self.min_shared:
-                self.vacated[s] = Vacated(self.cycle, tab.member[s].copy(), held, float(tab.born[s]))
+            elif tab.confirmed[s] and members.sum() >= self.min_shared:
+                self.vacated[s] = Held(self.cycle, tab.member[s].copy(), members, float(tab.born[s]))
 
     def dissociated(self, tab: TrackTable, s: np.ndarray, b: np.ndarray) -> None:
         """Note this cycle's memberships dissociated by [48] (slots s, bases b): a track
         removed this cycle holds its number for them too (`vacate`), and a confirmed track
         they leave without members holds it while it coasts (module doc: an orphan)."""
-        self.cut = {}
-        for v in np.unique(s).tolist():
-            lost = np.zeros(tab.has.shape[1], dtype=bool)
-            lost[b[s == v]] = True
-            self.cut[v] = lost
-            if tab.confirmed[v] and not tab.has[v].any() and lost.sum() >= self.min_shared:
-                self.orphans[v] = Vacated(self.cycle, tab.member[v].copy(), lost, float(tab.born[v]))
+        v, inv = np.unique(s, return_inverse=True)
+        lost = np.zeros((v.size, tab.has.shape[1]), dtype=bool)
+        lost[inv, b] = True
+        self.cut = dict(zip(v.tolist(), lost))
+        alone = tab.confirmed[v] & ~tab.has[v].any(axis=1) & (lost.sum(axis=1) >= self.min_shared)
+        for k in np.flatnonzero(alone).tolist():
+            self.orphans[int(v[k])] = Held(self.cycle, tab.member[v[k]].copy(), lost[k], float(tab.born[v[k]]))
 
     def held_orphans(self) -> np.ndarray:
         """Slots of the recorded orphans."""
@@ -99,8 +100,8 @@ class Succession:
         Returns the numbers given up: the moved tracks' and the replaced orphans'."""
         self.orphans = {v: o for v, o in self.orphans.items() if not tab.has[v].any()}
         left = []
+        known = {**self.vacated, **self.orphans}
         for s in confirmed_now.tolist():
-            known = {**self.vacated, **self.orphans}
             shared = {v: int(np.sum(old.has & tab.has[s] & (old.member == tab.member[s])))
                       for v, old in known.items()}
             best = max(shared, key=lambda v: (shared[v], known[v].cycle), default=None)
@@ -108,7 +109,8 @@ class Succession:
                 continue
             if best in self.orphans:
                 left.append(int(tab.id[best]))
-            rec = self.orphans.pop(best) if best in self.orphans else self.vacated.pop(best)
+            rec = known.pop(best)
+            (self.orphans if best in self.orphans else self.vacated).pop(best)
             tab.copy_rows([s], [best])
             tab.id[best] = best + tab.first_id
             tab.born[best] = rec.born
