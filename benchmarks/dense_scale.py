@@ -102,7 +102,7 @@ import numpy as np
 from common.deploy.config import parse, section
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, score_targets
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import gtracks_message, plots_of

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from common.deploy.config import load, section
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
 from common.wire.radar_chain import RadarChain
 from common.sim.scenario import load_scenario

@@ -27,7 +27,8 @@ from common.bus.local_run import Deployment
 from common.radar.bistatic import POS, project
 from common.deploy.config import load, section
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.plot_fusion import Plots
 from common.wire.radar_messages import gtracks_message
 from common.evaluation.pcrlb import Evaluation, score_targets

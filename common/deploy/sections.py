@@ -15,7 +15,7 @@ from common.deploy.ranges import ranges_of
 from common.core.crossing import CrossingParams
 from common.sonar.ctma import CtmaParams
 from common.radar.elementary import ElementaryParams, RadarCrossingParams
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.radar.plot_fusion import PlotterParams
 from common.sonar.tma_manager import BoundsParams, SupportParams, TmaParams
 

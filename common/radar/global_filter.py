@@ -71,7 +71,7 @@ from common.radar.global_assoc import ETrackSet
 from common.radar.localisation import Constraints, linearised_position
 
 if TYPE_CHECKING:
-    from common.radar.global_fusion import FusionParams
+    from common.radar.fusion_params import FusionParams
 
 
 @dataclass(frozen=True)

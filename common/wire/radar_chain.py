@@ -16,7 +16,8 @@ from typing import Any
 from common.deploy.config import Config, section
 from common.core.crossing import CrossingParams
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.plot_fusion import PlotFusion, PlotterParams
 from common.wire.radar_messages import gtracks_message, plots_of
 

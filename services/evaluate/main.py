@@ -22,7 +22,7 @@ import numpy as np
 from common.wire import protocol
 from common.cli import add_common, load_config
 from common.deploy.config import Config, section
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.bus.service import Service

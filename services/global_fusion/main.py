@@ -33,7 +33,7 @@ import time
 
 from common.cli import add_common, load_config
 from common.deploy.config import ConfigError, section
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.wire.radar_chain import global_fusion
 from common.wire.radar_messages import etracks_of, gtracks_message
 from common.bus.service import Service

@@ -34,7 +34,7 @@ import pytest
 from common.deploy.config import load, section
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.sim.scenario import radar_scene
 from common.wire.sim_messages import truth_state
 from tests.harness import SCENARIOS, Deployment, patient_scene

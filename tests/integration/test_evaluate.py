@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from common.deploy.config import load, section
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.bus.procs import Child

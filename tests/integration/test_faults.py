@@ -20,7 +20,8 @@ import pytest
 
 from common.bus.transport import Publisher, free_port, open_session
 from common.deploy.config import ZenohConfig, load
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
 from common.wire.radar_messages import etracks_from

@@ -28,7 +28,7 @@ import pytest
 
 from common.radar.bistatic import POS
 from common.deploy.config import load, section
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.wire.radar_chain import RadarChain
 from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario

@@ -11,7 +11,8 @@ from common.radar.bistatic import POS, project
 from common.deploy.config import RadarBase
 from common.radar.global_ekf import fused_update, observation
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.plot_fusion import Plots
 from common.core.track_table import STATUS_NAME, Status
 from common.wire.radar_messages import etracks_from, gtracks_message

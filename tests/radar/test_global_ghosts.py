@@ -11,7 +11,8 @@ from common.core.gating import chi2_gate
 from common.deploy.config import RadarBase
 from common.radar.bistatic import project
 from common.radar.global_assoc import ETrackSet, component_gamma
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.global_merge import duplicate_pairs, explained
 
 GAMMA = chi2_gate(0.999, 3)

@@ -81,7 +81,8 @@ def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None
     from common.deploy.config import RadarBase
     from common.radar.bistatic import project
     from common.radar.global_assoc import ETrackSet
-    from common.radar.global_fusion import FusionParams, GlobalFusion
+    from common.radar.fusion_params import FusionParams
+    from common.radar.global_fusion import GlobalFusion
 
     rx = np.array([0.0, 0.0, 30.0])
     tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])

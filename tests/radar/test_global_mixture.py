@@ -14,7 +14,8 @@ from common.core import imm
 from common.radar.bistatic import POS, bistatic_range, project
 from common.deploy.config import load
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.global_init import InitParams, altitude_bands
 from common.radar.plot_fusion import Plots
 from common.wire.radar_chain import RadarChain

@@ -11,7 +11,7 @@ import numpy as np
 from common.radar.bistatic import POS, project
 from common.radar.global_assoc import ETrackSet, component_gate
 from common.radar.global_filter import MixtureFilter
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 from common.radar.global_reopen import contradicted, floor_vertical, reopen, sound_members
 from common.core.gating import chi2_gate
 from common.radar.localisation import Constraints, gauss_newton

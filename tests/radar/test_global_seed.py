@@ -17,7 +17,8 @@ from common.radar import global_fusion as gfm
 from common.radar.bistatic import POS, project
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
 from common.radar.global_filter import BandFixes
-from common.radar.global_fusion import FusionParams, GlobalFusion
+from common.radar.fusion_params import FusionParams
+from common.radar.global_fusion import GlobalFusion
 from common.radar.global_init import Candidates, InitParams
 from common.radar.localisation import Constraints, block_localise, gauss_newton
 from common.radar.plot_fusion import Plots

@@ -15,7 +15,7 @@ from common.radar.bistatic import POS, project
 from common.radar.global_assoc import distance, projections
 from common.radar.global_ekf import observation, vb_deletion_residuals
 from common.radar.global_filter import MixtureFilter
-from common.radar.global_fusion import FusionParams
+from common.radar.fusion_params import FusionParams
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0],
