@@ -97,6 +97,7 @@ class GlobalFusion:
         self.init_p = InitParams(**{f.name: getattr(self.p, f.name)
                                     for f in dataclasses.fields(InitParams)})
         self.base_ids = [b.id for b in bases]
+        self.confirm_bases = min(self.p.confirm_bases, max(2, len(bases) - 1))  # FusionParams
         self.index = {b: i for i, b in enumerate(self.base_ids)}
         self.tx = np.array([b.tx for b in bases], dtype=float)
         self.rx = np.array([b.rx for b in bases], dtype=float)
@@ -306,7 +307,7 @@ class GlobalFusion:
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
-        tab.n_good[live] += located & (n_act >= self.p.confirm_bases)
+        tab.n_good[live] += located & (n_act >= self.confirm_bases)
         was = tab.confirmed[live]
         tab.confirmed[live] = was | (tab.n_good[live] >= self.p.confirm_cycles)
         tab.n_quiet[live] = quiet_cycles(tab.n_quiet[live], np.append(E.updated, False)[r].any(1))

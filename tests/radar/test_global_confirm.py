@@ -2,7 +2,8 @@
 scan counts only when the track's contributors were located together (module 64's
 chi-square test passed), so a track of two targets' elementary tracks is not confirmed
 (dense1000.toml: number switches 4.7 -> 4.4 per 100 targets, a target first scored on
-such a track), and a tentative track that loses a member counts its cycles again."""
+such a track); with four bases three must be located together (two give a curve); a
+tentative track that loses a member counts its cycles again."""
 
 from __future__ import annotations
 
@@ -27,19 +28,19 @@ def _at(state: np.ndarray, t: float) -> np.ndarray:
     return state + t * np.array([state[1], 0.0, state[3], 0.0, state[5], 0.0])
 
 
-def _confirmed_after(second: np.ndarray, scans: int = 5) -> bool:
-    """One global track on bases 0 and 1, fed base 0's elementary track of TRUTH and
-    base 1's of `second` for `scans` scans: is it confirmed?"""
-    gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(4)],
+def _confirmed_after(second: np.ndarray, scans: int = 5, n_bases: int = 3) -> bool:
+    """One global track on bases 0 and 1 of a deployment of `n_bases`, fed base 0's
+    elementary track of TRUTH and base 1's of `second` for `scans` scans: is it confirmed?"""
+    gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(n_bases)],
                       FusionParams())
     tab = gf.table
     s = tab.add(1)
     P = np.diag([200.0**2, 10.0**2, 200.0**2, 10.0**2, 300.0**2, 3.0**2])
     tab.x[s], tab.P[s], tab.xm[s], tab.Pm[s] = TRUTH, P, TRUTH, P
     tab.mu[s] = np.eye(1, tab.mu.shape[1])
-    tab.has[s] = [[True, True, False, False]]
+    tab.has[s] = np.arange(n_bases) < 2
     tab.t_last[s] = 0.0
-    row = np.full((tab.capacity, 4), -1, dtype=np.intp)
+    row = np.full((tab.capacity, n_bases), -1, dtype=np.intp)
     row[s[0], :2] = [0, 1]
     for k in range(1, scans + 1):
         t = float(k)
@@ -58,6 +59,11 @@ def _confirmed_after(second: np.ndarray, scans: int = 5) -> bool:
 
 def test_a_track_whose_two_bases_see_one_target_is_confirmed() -> None:
     assert _confirmed_after(TRUTH)
+
+
+def test_of_four_bases_two_do_not_confirm() -> None:
+    """confirm_bases 3, capped at all bases but one: three of four bases, two of three."""
+    assert not _confirmed_after(TRUTH, scans=8, n_bases=4)
 
 
 def test_a_track_whose_bases_see_two_targets_is_not_confirmed() -> None:
