@@ -28,9 +28,9 @@ def _at(state: np.ndarray, t: float) -> np.ndarray:
     return state + t * np.array([state[1], 0.0, state[3], 0.0, state[5], 0.0])
 
 
-def _confirmed_after(second: np.ndarray, scans: int = 5, n_bases: int = 3) -> bool:
-    """One global track on bases 0 and 1 of a deployment of `n_bases`, fed base 0's
-    elementary track of TRUTH and base 1's of `second` for `scans` scans: is it confirmed?"""
+def _fusion_with_a_track(n_bases: int) -> tuple[GlobalFusion, np.ndarray]:
+    """GlobalFusion over the first `n_bases` bases and one tentative track at TRUTH (one
+    live component), without memberships yet: (fusion, its slot)."""
     gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(n_bases)],
                       FusionParams())
     tab = gf.table
@@ -38,6 +38,14 @@ def _confirmed_after(second: np.ndarray, scans: int = 5, n_bases: int = 3) -> bo
     P = np.diag([200.0**2, 10.0**2, 200.0**2, 10.0**2, 300.0**2, 3.0**2])
     tab.x[s], tab.P[s], tab.xm[s], tab.Pm[s] = TRUTH, P, TRUTH, P
     tab.mu[s] = np.eye(1, tab.mu.shape[1])
+    return gf, s
+
+
+def _confirmed_after(second: np.ndarray, scans: int = 5, n_bases: int = 3) -> bool:
+    """One global track on bases 0 and 1 of a deployment of `n_bases`, fed base 0's
+    elementary track of TRUTH and base 1's of `second` for `scans` scans: is it confirmed?"""
+    gf, s = _fusion_with_a_track(n_bases)
+    tab = gf.table
     tab.has[s] = np.arange(n_bases) < 2
     tab.t_last[s] = 0.0
     row = np.full((tab.capacity, n_bases), -1, dtype=np.intp)
@@ -76,13 +84,8 @@ def _one_cycle_after_two_good(base2: np.ndarray) -> tuple[bool, int]:
     """A tentative track on the four bases with two counted cycles, at TRUTH; one cycle
     (GlobalFusion.cycle) in which bases 0, 1, 3 report TRUTH's elementary track and base 2
     the one of `base2`: (confirmed, counted cycles) after it."""
-    gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(4)],
-                      FusionParams())
+    gf, s = _fusion_with_a_track(4)
     tab = gf.table
-    s = tab.add(1)
-    P = np.diag([200.0**2, 10.0**2, 200.0**2, 10.0**2, 300.0**2, 3.0**2])
-    tab.x[s], tab.P[s], tab.xm[s], tab.Pm[s] = TRUTH, P, TRUTH, P
-    tab.mu[s] = np.eye(1, tab.mu.shape[1])
     tab.has[s], tab.member[s] = True, 7
     tab.t_last[s], tab.n_good[s] = 0.0, 2
     msgs = {}
