@@ -49,6 +49,8 @@ Cycle at t (001 figure 7):
     but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
     its status, unless none was updated at its base for `coast_cycles` cycles
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
+    Confirmation: `confirm_cycles` cycles located on `confirm_bases` bases (three of
+    four), counted again when a tentative track loses a member (FusionParams says why).
 Decorrelation, module 64 per band and the mixture: common.radar.global_filter. Modules
 63 ([48]) and 62 use the elementary tracks' estimates (common.radar.global_assoc: why).
 Motion model: an IMM of two [51] models (common.radar.global_filter says why). Seed path
