@@ -186,7 +186,8 @@ class GlobalFusion:
         members that left or fail the gate [48] in every live component of the
         predicted mixture (weights, means, covariances; global_assoc.
         gated_component_pairs says why), -1 where none or base not reported; and the
-        slots that lost a member (here, or by module 64's v_b test last cycle; global_reopen)."""
+        slots that lost a member (here, or by module 64's v_b test last cycle; global_reopen),
+        whose confirmation count restarts if they are tentative."""
         tab = self.table
         row = np.full((tab.capacity, len(self.base_ids)), -1, dtype=np.intp)
         s, b = np.nonzero(tab.has[live] & reported[None, :])
@@ -200,7 +201,8 @@ class GlobalFusion:
         ok[sel] = component_gate(*(a[s[sel]] for a in mixture), E.y[r[sel]], E.R[r[sel]],
                                  self.tx[b[sel]], self.rx[b[sel]], self.gamma_max)  # [48]
         tab.has[s[~ok], b[~ok]] = False  # dissociation
-        self.succession.dissociated(tab, s[sel[~ok[sel]]], b[sel[~ok[sel]]])  # by [48]
+        failed = sel[~ok[sel]]  # reported, failed [48]
+        self.succession.dissociated(tab, s[failed], b[failed])
         row[s[ok], b[ok]] = r[ok]
         lost = np.union1d(s[~ok], live[tab.suspect[live]])
         tab.n_good[lost[~tab.confirmed[lost]]] = 0  # confirmation restarts (FusionParams)
