@@ -54,6 +54,9 @@ class FusionParams(InitParams):
         [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
         and IMM parameters are then unused.
     reopen_altitude: rebuild a contradicted track, floor an open one (global_reopen; "mixture").
+    segment_accel: standard deviation (m/s^2, per plan axis) of the constant acceleration
+        a coasting track's aircraft may have held since its last update, in the test of
+        the track segment association (common.radar.global_segments); 0 turns it off.
     """
 
     gate_prob: float = 0.999
@@ -77,3 +80,4 @@ class FusionParams(InitParams):
     eq_gate_prob: float = 0.99999
     filter: Literal["mixture", "seed"] = "mixture"
     reopen_altitude: bool = True
+    segment_accel: float = 10.0

@@ -45,7 +45,9 @@ Cycle at t (001 figure 7):
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table), a
     removed or orphaned confirmed track's number held for the track that takes its
-    elementary tracks (common.radar.global_succession). A track whose contributors were reported
+    elementary tracks (common.radar.global_succession), a confirmed track that lost every
+    elementary track continued by the track confirmed after it on its aircraft (track
+    segment association, common.radar.global_segments). A track whose contributors were reported
     but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
     its status, unless none was updated at its base for `coast_cycles` cycles
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
@@ -77,6 +79,7 @@ from common.radar.global_merge import merge_tracks
 from common.radar.global_init import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.global_reopen import reopen
 from common.radar.global_report import GlobalTracks, etrack_set
+from common.radar.global_segments import segment_pairs
 from common.radar.global_succession import Succession
 from common.radar.global_status import quiet_cycles, reported_status
 from common.core.track_table import TrackTable
@@ -111,7 +114,7 @@ class GlobalFusion:
         K = self.filter.A * self.filter.M  # components: altitude bands x motion models
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "n_quiet": ((), np.int64),
-                                          "born": ((), float), "confirmed": ((), bool),
+                                          "born": ((), float), "t_fix": ((), float), "confirmed": ((), bool),
                                           "located": ((), bool), "ambiguous": ((), bool),
                                           "suspect": ((), bool), "mu": ((K,), float),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float)})
@@ -273,7 +276,7 @@ class GlobalFusion:
         xm, Pm, mu = self.filter.initial(xb, Pb, wb)
         tab.xm[slots], tab.Pm[slots], tab.mu[slots] = xm, Pm, mu
         tab.x[slots], tab.P[slots] = imm.combine(mu, xm, Pm)
-        tab.t_last[slots] = tab.born[slots] = t
+        tab.t_last[slots] = tab.born[slots] = tab.t_fix[slots] = t
         for k in range(2):
             tab.has[slots, E.base[used[:, k]]] = True
             tab.member[slots, E.base[used[:, k]]] = E.id[used[:, k]]
@@ -311,6 +314,7 @@ class GlobalFusion:
         tab.t_last[live] = t
         updated = located | single
         tab.n_coast[live] = np.where(updated, 0, tab.n_coast[live] + 1)
+        tab.t_fix[live] = np.where(updated, t, tab.t_fix[live])
         tab.n_good[live] += located & (n_act >= self.confirm_bases)
         was = tab.confirmed[live]
         tab.confirmed[live] = was | (tab.n_good[live] >= self.p.confirm_cycles)
@@ -318,6 +322,19 @@ class GlobalFusion:
         tab.status[live] = reported_status(tab.confirmed[live], (r >= 0).any(1), np.isin(live, new),
                                            tab.n_quiet[live], self.p.coast_cycles)  # module 61
         return live[tab.confirmed[live] & ~was]
+
+    def _continue_segments(self, t: float, now: np.ndarray) -> np.ndarray:
+        """Track segment association (common.radar.global_segments) of the tracks `now`
+        (confirmed this cycle) with the confirmed tracks that lost every member; returns
+        the tracks of `now` left in their slots."""
+        tab = self.table
+        live = tab.active_indices()
+        old = live[tab.confirmed[live] & ~tab.has[live].any(axis=1) & (tab.n_coast[live] > 0)]
+        i, j = segment_pairs(tab.x[old], tab.P[old], t - tab.t_fix[old], tab.x[now], tab.P[now],
+                             self.p.segment_accel, chi2_gate(self.p.gate_prob, 6))
+        keep = tab.born[now[j]] >= tab.t_fix[old[i]]  # segments disjoint in time
+        self.crossing.forget(self.succession.continue_segments(tab, now[j[keep]], old[i[keep]]))
+        return now[tab.alive[now]]
 
     def _manage(self, t: float, E: ETrackSet, row: np.ndarray, now: tuple | np.ndarray = ()) -> GlobalTracks:
         """Module 61: scores, deletion, recycling, succession of `now` (slots confirmed this
@@ -328,15 +345,18 @@ class GlobalFusion:
         tab.score[live] = np.append(E.score, 0.0)[r].sum(axis=1)  # module 61
         orphan = ~tab.has[live].any(axis=1)
         dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
+        now = np.asarray(now, dtype=np.intp)
         gone, renamed = merge_tracks(tab, live, r, E, self.tx, self.rx, self.az_gate,
-                                     self.gamma_max)  # common.radar.global_merge
+                                     self.gamma_max, now)  # common.radar.global_merge
         dead = np.union1d(dead, gone)
         if dead.size:
             self.crossing.forget(tab.id[np.union1d(dead, renamed)])
             self.succession.vacate(tab, dead)
             tab.remove(dead)
-        now = np.asarray(now, dtype=np.intp)
-        self.crossing.forget(self.succession.inherit(tab, now[tab.alive[now]]))
+        now = now[tab.alive[now]]
+        if self.p.segment_accel > 0:
+            now = self._continue_segments(t, now)
+        self.crossing.forget(self.succession.inherit(tab, now))
         self.t_last = t
         s = tab.active_indices()
         return GlobalTracks(float(t), tuple(self.base_ids), tab.id[s].copy(), tab.status[s].copy(),

@@ -59,7 +59,11 @@ labelled with the truth): 8 of the 77 number switches were a confirmed track, as
 to a target, explained by a tentative track just started from that target's free
 elementary tracks (6 of the 28 merges of `explained`): the target changed number when
 its new track was confirmed. The kept track stays tentative until confirmed (moving the
-confirmation too made false tracks and NEES worse).
+confirmation too made false tracks and NEES worse). A kept track confirmed in this very
+cycle counts as not confirmed here (since session 16): its number was never published
+as confirmed, so the dropped track's published number goes on (a coasting confirmed
+track merged, in the cycle that confirms it, with the track of its aircraft's new
+elementary tracks).
 """
 
 from __future__ import annotations
@@ -169,12 +173,13 @@ def number_kept(keep_confirmed: np.ndarray, drop_confirmed: np.ndarray) -> np.nd
 
 
 def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
-                 tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float
-                 ) -> tuple[np.ndarray, np.ndarray]:
+                 tx: np.ndarray, rx: np.ndarray, az_gate: float, gamma: float,
+                 fresh: np.ndarray = np.zeros(0, dtype=np.intp)) -> tuple[np.ndarray, np.ndarray]:
     """Both tests on the live tracks (slots `live` of the global track table, r their rows
     of E): the kept track of each pair (the older, or the one with contributors: module
     doc) takes the other's elementary tracks and score and keeps its number, but for
-    `number_kept`. Returns (slots to delete: the
+    `number_kept` (the slots of `fresh`, confirmed this cycle, counted as not
+    confirmed). Returns (slots to delete: the
     merged-away and the dissolved tracks, slots now under another number)."""
     a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                            tab.has[live], gamma)
@@ -187,7 +192,7 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
     tab.member[keep] = np.where(tab.has[drop], tab.member[drop], tab.member[keep])
     tab.has[keep] |= tab.has[drop]
     tab.score[keep] += tab.score[drop]
-    mv = number_kept(tab.confirmed[keep], tab.confirmed[drop])
+    mv = number_kept(tab.confirmed[keep] & ~np.isin(keep, fresh), tab.confirmed[drop])
     tab.copy_rows(keep[mv], drop[mv], ("id", "born"))
     keep, drop = np.where(mv, drop, keep), np.where(mv, keep, drop)
     return np.union1d(drop, live[gone]), keep[mv]

@@ -111,12 +111,30 @@ class Succession:
                 left.append(int(tab.id[best]))
             rec = known.pop(best)
             (self.orphans if best in self.orphans else self.vacated).pop(best)
-            tab.copy_rows([s], [best])
-            tab.id[best] = best + tab.first_id
-            tab.born[best] = rec.born
-            left.append(int(tab.id[s]))
-            tab.remove([s])
+            left.append(_take(tab, s, best, rec.born))
         self.cycle += 1
         self.vacated = {v: old for v, old in self.vacated.items() if self.cycle - old.cycle <= self.keep}
         self.orphans = {v: old for v, old in self.orphans.items() if self.cycle - old.cycle <= self.keep}
         return np.array(left, dtype=np.int64)
+
+    def continue_segments(self, tab: TrackTable, new: np.ndarray, old: np.ndarray) -> np.ndarray:
+        """Move each track of `new` (slots confirmed this cycle) to the slot (number) of
+        the coasting track of `old` it continues (common.radar.global_segments), which is
+        dropped for it; returns the numbers given up (both)."""
+        left = []
+        for s, o in zip(new.tolist(), old.tolist()):
+            self.orphans.pop(o, None)
+            left.append(int(tab.id[o]))
+            left.append(_take(tab, s, o, float(tab.born[o])))
+        return np.array(left, dtype=np.int64)
+
+
+def _take(tab: TrackTable, s: int, dst: int, born: float) -> int:
+    """Track of slot s moved to slot dst (its number), with the birth time `born`;
+    returns s's number, now free."""
+    tab.copy_rows([s], [dst])
+    tab.id[dst] = dst + tab.first_id
+    tab.born[dst] = born
+    gone = int(tab.id[s])
+    tab.remove([s])
+    return gone

@@ -73,11 +73,11 @@ def test_a_coasting_track_pairs_with_the_track_that_took_its_target() -> None:
     assert duplicate_pairs(pos, cov, _has((), ()), GAMMA)[0].size == 0
 
 
-def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None:
-    """Module 61 (_manage) on a confirmed coasting track (slot 0, no contributors, the
-    older) and a tentative track holding the target's new elementary tracks (slot 1):
-    one track is left, with slot 1's state and elementary tracks, under the coasting
-    track's number and birth time (global_merge.number_kept)."""
+def _coasting_and_new(new_confirmed: bool, now: list[int]) -> tuple:
+    """Module 61 (_manage) at t = 52 on a confirmed coasting track (slot 0, no
+    contributors, born at 2 s) and a track holding the target's new elementary tracks
+    (slot 1, born at 50 s, confirmed or not; `now`: the slots confirmed this cycle):
+    (the table, the cycle's output, the truth)."""
     from common.deploy.config import RadarBase
     from common.radar.bistatic import project
     from common.radar.global_assoc import ETrackSet
@@ -97,12 +97,29 @@ def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None
     tab.mu[slots] = np.eye(1, tab.mu.shape[1])
     tab.has[slots] = [[False, False], [True, True]]
     tab.member[slots] = [[0, 0], [4, 5]]
-    tab.confirmed[slots], tab.born[slots] = [True, False], [2.0, 50.0]
+    tab.confirmed[slots], tab.born[slots] = [True, new_confirmed], [2.0, 50.0]
     y = np.array([project(truth[None], tx[k], rx)[0] for k in range(2)])
     R = np.tile(np.diag([40.0**2, 0.5**2, np.radians(0.3) ** 2]), (2, 1, 1))
     one, no = np.ones(2, dtype=bool), np.zeros(2, dtype=bool)
     E = ETrackSet(np.array([0, 1]), np.array([4, 5]), y, R, np.ones(2), one, one, no, y, R, one)
-    out = gf._manage(52.0, E, np.array([[-1, -1], [0, 1]]))
+    out = gf._manage(52.0, E, np.array([[-1, -1], [0, 1]]), np.array(now, dtype=np.intp))
+    return tab, out, truth
+
+
+def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None:
+    """A tentative new track: one track is left, with slot 1's state and elementary
+    tracks, under the coasting track's number and birth time, tentative
+    (global_merge.number_kept)."""
+    tab, out, truth = _coasting_and_new(False, [])
     assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and not tab.confirmed[0]
     np.testing.assert_array_equal(out.x[0], truth)
     assert out.has[0].tolist() == [True, True] and out.member[0].tolist() == [4, 5]
+
+
+def test_a_track_confirmed_this_cycle_takes_the_coasting_number_too() -> None:
+    """Its own number was never published as confirmed (dense1000: the aircraft kept
+    by the coasting number); a track confirmed in an earlier cycle keeps its own."""
+    tab, out, _ = _coasting_and_new(True, [1])
+    assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and tab.confirmed[0]
+    tab, out, _ = _coasting_and_new(True, [])
+    assert out.id.tolist() == [tab.id[1]] and tab.born[1] == 50.0
