@@ -102,7 +102,7 @@ RANGES: dict[str, dict[str, Range]] = {
         "meas_inflation": positive(), "confirm_cycles": count(1), "confirm_bases": count(2),
         "max_coast": count(0), "coast_cycles": count(1), "max_wait": positive("s"),
         "max_lead": positive("s"),
-        "eq_gate_prob": PROB_OPEN,
+        "eq_gate_prob": PROB_OPEN, "segment_accel": non_negative("m/s^2"),
     },
     "radar.fusion_crossing": _CROSSING,
     "sonar.crossing": _CROSSING,
