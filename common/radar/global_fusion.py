@@ -47,7 +47,8 @@ Cycle at t (001 figure 7):
     removed or orphaned confirmed track's number held for the track that takes its
     elementary tracks (common.radar.global_succession), a confirmed track that lost every
     elementary track continued by the track confirmed after it on its aircraft (track
-    segment association, common.radar.global_segments). A track whose contributors were reported
+    segment association, common.radar.global_segments); a number once published as
+    confirmed is not replaced. A track whose contributors were reported
     but gave no measurement (e.g. crossing.toml t = 52, 59) is predicted only but keeps
     its status, unless none was updated at its base for `coast_cycles` cycles
     (common.radar.global_status). Duplicates are merged: common.radar.global_merge.
@@ -114,7 +115,8 @@ class GlobalFusion:
         K = self.filter.A * self.filter.M  # components: altitude bands x motion models
         self.table = TrackTable(6, extra={"member": ((B,), np.int64), "has": ((B,), bool),
                                           "n_good": ((), np.int64), "n_quiet": ((), np.int64),
-                                          "born": ((), float), "t_fix": ((), float), "confirmed": ((), bool),
+                                          "born": ((), float), "t_fix": ((), float),
+                                          "confirmed": ((), bool), "published": ((), bool),
                                           "located": ((), bool), "ambiguous": ((), bool),
                                           "suspect": ((), bool), "mu": ((K,), float),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float)})
@@ -346,6 +348,7 @@ class GlobalFusion:
         orphan = ~tab.has[live].any(axis=1)
         dead = live[orphan & (tab.n_coast[live] > self.p.max_coast)]
         now = np.asarray(now, dtype=np.intp)
+        now = now[~tab.published[now]]  # new numbers only: a published number is kept
         gone, renamed = merge_tracks(tab, live, r, E, self.tx, self.rx, self.az_gate,
                                      self.gamma_max, now)  # common.radar.global_merge
         dead = np.union1d(dead, gone)
@@ -359,6 +362,7 @@ class GlobalFusion:
         self.crossing.forget(self.succession.inherit(tab, now))
         self.t_last = t
         s = tab.active_indices()
+        tab.published[s] |= tab.confirmed[s]
         return GlobalTracks(float(t), tuple(self.base_ids), tab.id[s].copy(), tab.status[s].copy(),
                             tab.x[s].copy(), tab.P[s].copy(), tab.score[s].copy(),
                             tab.member[s].copy(), tab.has[s].copy(), tab.ambiguous[s].copy())

@@ -179,7 +179,8 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
     of E): the kept track of each pair (the older, or the one with contributors: module
     doc) takes the other's elementary tracks and score and keeps its number, but for
     `number_kept` (the slots of `fresh`, confirmed this cycle, counted as not
-    confirmed). Returns (slots to delete: the
+    confirmed; the number keeps its `published` mark: common.radar.global_succession).
+    Returns (slots to delete: the
     merged-away and the dissolved tracks, slots now under another number)."""
     a, b = duplicate_pairs(tab.x[live][:, POS], tab.P[live][:, POS][:, :, POS],
                            tab.has[live], gamma)
@@ -193,6 +194,6 @@ def merge_tracks(tab: TrackTable, live: np.ndarray, r: np.ndarray, E: ETrackSet,
     tab.has[keep] |= tab.has[drop]
     tab.score[keep] += tab.score[drop]
     mv = number_kept(tab.confirmed[keep] & ~np.isin(keep, fresh), tab.confirmed[drop])
-    tab.copy_rows(keep[mv], drop[mv], ("id", "born"))
+    tab.copy_rows(keep[mv], drop[mv], ("id", "born", "published"))
     keep, drop = np.where(mv, drop, keep), np.where(mv, keep, drop)
     return np.union1d(drop, live[gone]), keep[mv]

@@ -123,3 +123,50 @@ def test_a_track_confirmed_this_cycle_takes_the_coasting_number_too() -> None:
     assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and tab.confirmed[0]
     tab, out, _ = _coasting_and_new(True, [])
     assert out.id.tolist() == [tab.id[1]] and tab.born[1] == 50.0
+
+
+def _reconfirmed(published: bool) -> tuple:
+    """Module 61 (_manage) on a track confirmed this cycle (slot 1, elementary tracks 4
+    and 5) beside the held number of a removed confirmed track that had held them (slot
+    0): `published`, the track's number was published as confirmed before (a merge kept
+    it, tentative: number_kept). (the table, the cycle's output)."""
+    from common.deploy.config import RadarBase
+    from common.radar.bistatic import project
+    from common.radar.global_assoc import ETrackSet
+    from common.radar.fusion_params import FusionParams
+    from common.radar.global_fusion import GlobalFusion
+
+    rx = np.array([0.0, 0.0, 30.0])
+    tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])
+    truth = np.array([18000.0, 120.0, 30000.0, -150.0, 3000.0, 0.0])
+    gf = GlobalFusion([RadarBase(f"b{k}", tx[k], rx, ["c1"]) for k in range(2)], FusionParams())
+    tab = gf.table
+    slots = tab.add(2)
+    P = np.diag([40.0**2, 5.0**2, 40.0**2, 5.0**2, 60.0**2, 2.0**2])
+    tab.x[slots], tab.P[slots] = truth, P
+    tab.xm[slots], tab.Pm[slots] = truth, P
+    tab.mu[slots] = np.eye(1, tab.mu.shape[1])
+    tab.has[slots] = True
+    tab.member[slots] = [4, 5]
+    tab.confirmed[slots], tab.born[slots] = True, [2.0, 3.0]
+    tab.published[1] = published
+    gf.succession.vacate(tab, slots[:1])
+    tab.remove(slots[:1])
+    y = np.array([project(truth[None], tx[k], rx)[0] for k in range(2)])
+    R = np.tile(np.diag([40.0**2, 0.5**2, np.radians(0.3) ** 2]), (2, 1, 1))
+    one, no = np.ones(2, dtype=bool), np.zeros(2, dtype=bool)
+    E = ETrackSet(np.array([0, 1]), np.array([4, 5]), y, R, np.ones(2), one, one, no, y, R, one)
+    out = gf._manage(60.0, E, np.array([[-1, -1], [0, 1]]), np.array([1]))
+    return tab, out
+
+
+def test_a_published_number_is_not_given_up_to_a_held_one() -> None:
+    """dense1000 seed 16, aircraft 905: its track #530, merged at t = 59 with the track
+    of its new elementary tracks (number_kept: tentative under 530), was confirmed again
+    at t = 63 and then took the held number of a removed track that had held two of
+    those elementary tracks. A number already published stays; a new one is replaced
+    (common.radar.global_succession)."""
+    tab, out = _reconfirmed(True)
+    assert out.id.tolist() == [tab.first_id + 1]
+    tab, out = _reconfirmed(False)
+    assert out.id.tolist() == [tab.first_id] and tab.born[0] == 2.0
