@@ -73,11 +73,13 @@ def test_a_coasting_track_pairs_with_the_track_that_took_its_target() -> None:
     assert duplicate_pairs(pos, cov, _has((), ()), GAMMA)[0].size == 0
 
 
-def _coasting_and_new(new_confirmed: bool, now: list[int]) -> tuple:
-    """Module 61 (_manage) at t = 52 on a confirmed coasting track (slot 0, no
-    contributors, born at 2 s) and a track holding the target's new elementary tracks
-    (slot 1, born at 50 s, confirmed or not; `now`: the slots confirmed this cycle):
-    (the table, the cycle's output, the truth)."""
+TRUTH = np.array([18000.0, 120.0, 30000.0, -150.0, 3000.0, 0.0])
+
+
+def _two_tracks(offset: list[float]) -> tuple:
+    """GlobalFusion over two bases with two tracks (slots 0 and 1) near TRUTH, slot 0
+    at `offset` from it, slot 1 on it, both holding elementary tracks 4 and 5, and the
+    elementary track set E of those two (TRUTH projected): (fusion, slots, E)."""
     from common.deploy.config import RadarBase
     from common.radar.bistatic import project
     from common.radar.global_assoc import ETrackSet
@@ -86,42 +88,52 @@ def _coasting_and_new(new_confirmed: bool, now: list[int]) -> tuple:
 
     rx = np.array([0.0, 0.0, 30.0])
     tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])
-    truth = np.array([18000.0, 120.0, 30000.0, -150.0, 3000.0, 0.0])
     gf = GlobalFusion([RadarBase(f"b{k}", tx[k], rx, ["c1"]) for k in range(2)], FusionParams())
     tab = gf.table
     slots = tab.add(2)
     P = np.diag([40.0**2, 5.0**2, 40.0**2, 5.0**2, 60.0**2, 2.0**2])
-    tab.x[slots] = np.stack([truth + [30.0, 0.0, -20.0, 0.0, 40.0, 0.0], truth])
+    tab.x[slots] = np.stack([TRUTH + offset, TRUTH])
     tab.P[slots] = P
     tab.xm[slots], tab.Pm[slots] = tab.x[slots][:, None], P
     tab.mu[slots] = np.eye(1, tab.mu.shape[1])
-    tab.has[slots] = [[False, False], [True, True]]
-    tab.member[slots] = [[0, 0], [4, 5]]
-    tab.confirmed[slots], tab.born[slots] = [True, new_confirmed], [2.0, 50.0]
-    y = np.array([project(truth[None], tx[k], rx)[0] for k in range(2)])
+    tab.has[slots] = True
+    tab.member[slots] = [4, 5]
+    y = np.array([project(TRUTH[None], tx[k], rx)[0] for k in range(2)])
     R = np.tile(np.diag([40.0**2, 0.5**2, np.radians(0.3) ** 2]), (2, 1, 1))
     one, no = np.ones(2, dtype=bool), np.zeros(2, dtype=bool)
     E = ETrackSet(np.array([0, 1]), np.array([4, 5]), y, R, np.ones(2), one, one, no, y, R, one)
+    return gf, slots, E
+
+
+def _coasting_and_new(new_confirmed: bool, now: list[int]) -> tuple:
+    """Module 61 (_manage) at t = 52 on a confirmed coasting track (slot 0, no
+    contributors, born at 2 s) and a track holding the target's new elementary tracks
+    (slot 1, born at 50 s, confirmed or not; `now`: the slots confirmed this cycle):
+    (the table, the cycle's output)."""
+    gf, slots, E = _two_tracks([30.0, 0.0, -20.0, 0.0, 40.0, 0.0])
+    tab = gf.table
+    tab.has[slots[0]] = False
+    tab.confirmed[slots], tab.born[slots] = [True, new_confirmed], [2.0, 50.0]
     out = gf._manage(52.0, E, np.array([[-1, -1], [0, 1]]), np.array(now, dtype=np.intp))
-    return tab, out, truth
+    return tab, out
 
 
 def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None:
     """A tentative new track: one track is left, with slot 1's state and elementary
     tracks, under the coasting track's number and birth time, tentative
     (global_merge.number_kept)."""
-    tab, out, truth = _coasting_and_new(False, [])
+    tab, out = _coasting_and_new(False, [])
     assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and not tab.confirmed[0]
-    np.testing.assert_array_equal(out.x[0], truth)
+    np.testing.assert_array_equal(out.x[0], TRUTH)
     assert out.has[0].tolist() == [True, True] and out.member[0].tolist() == [4, 5]
 
 
 def test_a_track_confirmed_this_cycle_takes_the_coasting_number_too() -> None:
     """Its own number was never published as confirmed (dense1000: the aircraft kept
     by the coasting number); a track confirmed in an earlier cycle keeps its own."""
-    tab, out, _ = _coasting_and_new(True, [1])
+    tab, out = _coasting_and_new(True, [1])
     assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and tab.confirmed[0]
-    tab, out, _ = _coasting_and_new(True, [])
+    tab, out = _coasting_and_new(True, [])
     assert out.id.tolist() == [tab.id[1]] and tab.born[1] == 50.0
 
 
@@ -130,32 +142,12 @@ def _reconfirmed(published: bool) -> tuple:
     and 5) beside the held number of a removed confirmed track that had held them (slot
     0): `published`, the track's number was published as confirmed before (a merge kept
     it, tentative: number_kept). (the table, the cycle's output)."""
-    from common.deploy.config import RadarBase
-    from common.radar.bistatic import project
-    from common.radar.global_assoc import ETrackSet
-    from common.radar.fusion_params import FusionParams
-    from common.radar.global_fusion import GlobalFusion
-
-    rx = np.array([0.0, 0.0, 30.0])
-    tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])
-    truth = np.array([18000.0, 120.0, 30000.0, -150.0, 3000.0, 0.0])
-    gf = GlobalFusion([RadarBase(f"b{k}", tx[k], rx, ["c1"]) for k in range(2)], FusionParams())
+    gf, slots, E = _two_tracks([0.0] * 6)
     tab = gf.table
-    slots = tab.add(2)
-    P = np.diag([40.0**2, 5.0**2, 40.0**2, 5.0**2, 60.0**2, 2.0**2])
-    tab.x[slots], tab.P[slots] = truth, P
-    tab.xm[slots], tab.Pm[slots] = truth, P
-    tab.mu[slots] = np.eye(1, tab.mu.shape[1])
-    tab.has[slots] = True
-    tab.member[slots] = [4, 5]
     tab.confirmed[slots], tab.born[slots] = True, [2.0, 3.0]
-    tab.published[1] = published
+    tab.published[slots[1]] = published
     gf.succession.vacate(tab, slots[:1])
     tab.remove(slots[:1])
-    y = np.array([project(truth[None], tx[k], rx)[0] for k in range(2)])
-    R = np.tile(np.diag([40.0**2, 0.5**2, np.radians(0.3) ** 2]), (2, 1, 1))
-    one, no = np.ones(2, dtype=bool), np.zeros(2, dtype=bool)
-    E = ETrackSet(np.array([0, 1]), np.array([4, 5]), y, R, np.ones(2), one, one, no, y, R, one)
     out = gf._manage(60.0, E, np.array([[-1, -1], [0, 1]]), np.array([1]))
     return tab, out
 
