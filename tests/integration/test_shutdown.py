@@ -25,6 +25,22 @@ SERVICES = [
 ]
 
 
+def signal_state(pid: int) -> str:
+    """The kernel's signal masks of a process and of each of its threads (pending,
+    blocked, ignored, caught: /proc/PID/task/TID/status), to tell on a hung shutdown
+    whether the signal was blocked, ignored or caught by a handler that did not act."""
+    lines = []
+    for task in sorted(Path(f"/proc/{pid}/task").glob("*")):
+        try:
+            status = (task / "status").read_text().splitlines()
+        except OSError:
+            continue
+        keep = [ln for ln in status if ln.split(":")[0] in
+                ("Name", "SigPnd", "ShdPnd", "SigBlk", "SigIgn", "SigCgt")]
+        lines.append(f"task {task.name}: " + "; ".join(ln.replace("\t", " ") for ln in keep))
+    return "\n".join(lines)
+
+
 def alive(d: Deployment, name: str) -> bool:
     return any(r.ok for r in d.session.liveliness().get(f"{ROOT}/alive/{name}", timeout=1.0))
 
@@ -40,6 +56,7 @@ def test_services_exit_cleanly_within_2_s(tmp_path: Path, sig: signal.Signals) -
             try:
                 code = child.proc.wait(5)
             except subprocess.TimeoutExpired:
+                print(f"{name} ignored {sig.name}; signal masks:\n{signal_state(child.proc.pid)}")
                 child.dump_stacks()  # into its log, which the Deployment prints on failure
                 raise
             took = time.monotonic() - t0
