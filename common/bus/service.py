@@ -111,6 +111,10 @@ class Service:
                 if time.monotonic() >= next_metrics:
                     self.publish(f"metrics/{self.name}/{self.instance}", self.metrics())
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
+                    replaced = signals.rearm(self.stop)
+                    if replaced:
+                        self.log.error("shutdown signal handling replaced, installed again: %s",
+                                       ", ".join(replaced))
         finally:
             signals.close()
             token.undeclare()

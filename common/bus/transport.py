@@ -157,6 +157,17 @@ class SignalBytes:
             return False
         return signal.SIGINT in data or signal.SIGTERM in data
 
+    def rearm(self, handler: Any) -> list[str]:
+        """Install ``handler`` for SIGINT and SIGTERM and this object's wakeup fd again;
+        returns what had been replaced since (by whom is not known: a service that
+        ignored both in tests/integration/test_shutdown.py had neither replaced at the
+        kernel level, which this makes visible in its log if it was at the Python level)."""
+        replaced = [s.name for s in (signal.SIGINT, signal.SIGTERM)
+                    if signal.signal(s, handler) != handler]
+        if signal.set_wakeup_fd(self._w.fileno(), warn_on_full_buffer=False) != self._w.fileno():
+            replaced.append("wakeup fd")
+        return replaced
+
     def close(self) -> None:
         signal.set_wakeup_fd(-1)
         self._r.close()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import time
 from pathlib import Path
@@ -92,5 +93,33 @@ def test_signal_bytes_see_a_shutdown_signal_whatever_its_python_handler_does() -
         assert not signals.received()
     finally:
         signals.close()
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def test_rearm_installs_the_handlers_and_the_wakeup_fd_again_and_says_what_was_replaced() -> None:
+    """The service loop calls SignalBytes.rearm every metrics period: a handler or a
+    wakeup fd replaced by other code is installed again, logged, and SIGTERM stops."""
+    calls: list[int] = []
+
+    def stop(sig: int, _frame: object) -> None:
+        calls.append(sig)
+
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    signals = SignalBytes()
+    other = socket.socketpair()
+    try:
+        assert signals.rearm(stop) == ["SIGINT", "SIGTERM"]  # the test's own were there
+        assert signals.rearm(stop) == []
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        other[1].setblocking(False)
+        signal.set_wakeup_fd(other[1].fileno())
+        assert signals.rearm(stop) == ["SIGTERM", "wakeup fd"]
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert signals.received() and calls == [signal.SIGTERM]
+    finally:
+        signals.close()
+        for s in other:
+            s.close()
         for s, h in old.items():
             signal.signal(s, h)
