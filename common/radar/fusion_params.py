@@ -54,6 +54,8 @@ class FusionParams(InitParams):
         [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
         and IMM parameters are then unused.
     reopen_altitude: rebuild a contradicted track, floor an open one (global_reopen; "mixture").
+    reopen_watch: the rebuild's test also on every other confirmed track, every cycle
+        (global_reopen: tracks fed by their own elementary tracks at a wrong altitude).
     segment_accel: standard deviation (m/s^2, per plan axis) of the constant acceleration
         a coasting track's aircraft may have held since its last update, in the test of
         the track segment association (common.radar.global_segments); 0 turns it off.
@@ -80,4 +82,5 @@ class FusionParams(InitParams):
     eq_gate_prob: float = 0.99999
     filter: Literal["mixture", "seed"] = "mixture"
     reopen_altitude: bool = True
+    reopen_watch: bool = True
     segment_accel: float = 10.0

@@ -24,7 +24,8 @@ Cycle at t (001 figure 7):
     prediction (resolution loop); a base whose elementary tracks of two tracks pass
     [48] against each other's track is not used by either this scan
     (global_assoc.ambiguous_members says why); a confirmed track that lost a member is
-    rebuilt or floored by its sound members (common.radar.global_reopen);
+    rebuilt or floored by its sound members, any other confirmed track rebuilt when
+    they contradict it (common.radar.global_reopen);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
     [46]); candidates that can be extended to more bases win conflicts, then lower
     residual; a candidate's conflicts include the elementary tracks of the other bases
@@ -164,6 +165,10 @@ class GlobalFusion:
         row, lost = self._confirm(live, (c, xm, Pm), E, reported)
         redo = reopen(lost[tab.confirmed[lost] & self.reopens], self.filter, (x, P, xm, Pm, c),
                       row, E, self.tx, self.rx, self.init_p, self.p.gate_prob)
+        if self.reopens and self.p.reopen_watch:  # the others: rebuilt if contradicted
+            kept = live[tab.confirmed[live] & ~np.isin(live, lost)]
+            redo = np.union1d(redo, reopen(kept, self.filter, (x, P, xm, Pm, c), row, E, self.tx,
+                                           self.rx, self.init_p, self.p.gate_prob, floor=False))
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
         self._extend(live, (c, xm, Pm), E, reported, free, row)

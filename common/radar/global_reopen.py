@@ -49,6 +49,22 @@ already hold the scan. Measured (benchmarks/dense_scale.py, dense1000 seeds 1-10
 rebuilds per run; seed 7's mean NEES 81.9 -> 6.7 (per-step pairing; both aircraft above), the other
 seeds' NEES, missed and false tracks unchanged within 0.1; switches per 100 targets
 +0.1 on seed 1, +0.2 on seed 7, -0.1 on seeds 8 and 9 (docs/radar_at_scale.md).
+
+The watch (`FusionParams.reopen_watch`, since session 16): the rebuild's test runs every
+cycle on the other confirmed tracks too, those that lost no member, without the floor
+(`floor=False`: an open evidence says nothing against a track that lost nothing). A
+track can be fed by its own elementary tracks only and still sit at a wrong altitude
+with a small sigma_z, once the members it lost while its start mixed two aircraft's
+elementary tracks are gone and nothing triggers the test (measured, dense1000 seed 34:
+aircraft 931 and 336, 1.2 km apart in plan on one course at 5.0 and 3.9 km; 931's track
+#580, tentative from t = 3 to 25 s while both aircraft's elementary tracks came and
+went, held its four own from t = 30 s, 1.7 km low with sigma_z 196 m, 336's #897 1.8 km
+high; the scoring paired each aircraft with the other's track, 336's per-target
+NEES 12636 and the run's mean NEES 15.62). With the watch, seed 34's mean NEES is
+3.05, with 16 rebuilds in the run (23 on seed 9). The "resolved" condition keeps the
+false rebuilds few: most tracks' members leave the altitude open at any one scan. Cost:
+global fusion 115 -> 155-162 ms per scan in process at 1000 targets
+(benchmarks/dense_scale.py; seeds 1-40 in docs/radar_at_scale.md, session 16).
 """
 
 from __future__ import annotations
@@ -95,7 +111,7 @@ def floor_vertical(P: np.ndarray, Pm: np.ndarray, slots: np.ndarray, Pmix: np.nd
 
 def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndarray, ...],
            row: np.ndarray, E: ETrackSet, tx: np.ndarray, rx: np.ndarray, p: InitParams,
-           gate_prob: float) -> np.ndarray:
+           gate_prob: float, floor: bool = True) -> np.ndarray:
     """In place in the predicted (x, P, xm, Pm, c) (MixtureFilter.predict) of each of
     `candidates` (confirmed tracks that lost a member this cycle) with at least MIN_SOUND
     sound members: rebuild the mixture when their evidence-weighted altitude bands
@@ -111,7 +127,8 @@ def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndar
     nx, nP, nc = filt.initial(xb, Pb, wb)
     cx, cP = imm.combine(nc, nx, nP)
     ok = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])  # resolved
-    floor_vertical(P, Pm, s[~ok], cP[~ok])
+    if floor:
+        floor_vertical(P, Pm, s[~ok], cP[~ok])
     k = ok & contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
     s = s[k]
     xm[s], Pm[s], c[s], x[s], P[s] = nx[k], nP[k], nc[k], cx[k], cP[k]
