@@ -125,6 +125,7 @@ class GlobalFusion:
         self.succession = Succession(self.p.max_coast)  # common.radar.global_succession
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # global_assoc.ambiguous_members
+        self.segment_gate = chi2_gate(self.p.gate_prob, 6)  # global_segments
         self.az_gate = np.radians(self.p.az_gate_deg)
         self.pending: dict[float, dict[int, ElementaryTracks]] = {}
         self.t_last: float | None = None
@@ -163,12 +164,10 @@ class GlobalFusion:
         live = tab.active_indices()
         x, P, xm, Pm, c = self.filter.predict(tab, t, live)  # [55]-[56]
         row, lost = self._confirm(live, (c, xm, Pm), E, reported)
-        redo = reopen(lost[tab.confirmed[lost] & self.reopens], self.filter, (x, P, xm, Pm, c),
-                      row, E, self.tx, self.rx, self.init_p, self.p.gate_prob)
-        if self.reopens and self.p.reopen_watch:  # the others: rebuilt if contradicted
-            kept = live[tab.confirmed[live] & ~np.isin(live, lost)]
-            redo = np.union1d(redo, reopen(kept, self.filter, (x, P, xm, Pm, c), row, E, self.tx,
-                                           self.rx, self.init_p, self.p.gate_prob, floor=False))
+        held = live[tab.confirmed[live] & self.reopens]
+        held = held if self.p.reopen_watch else held[np.isin(held, lost)]  # global_reopen
+        redo = reopen(held, self.filter, (x, P, xm, Pm, c), row, E, self.tx, self.rx, self.init_p,
+                      self.p.gate_prob, floor=np.isin(held, lost))  # floored: lost a member
         free = np.ones(len(E), dtype=bool)
         free[row[row >= 0]] = False
         self._extend(live, (c, xm, Pm), E, reported, free, row)
@@ -338,7 +337,7 @@ class GlobalFusion:
         live = tab.active_indices()
         old = live[tab.confirmed[live] & ~tab.has[live].any(axis=1) & (tab.n_coast[live] > 0)]
         i, j = segment_pairs(tab.x[old], tab.P[old], t - tab.t_fix[old], tab.x[now], tab.P[now],
-                             self.p.segment_accel, chi2_gate(self.p.gate_prob, 6))
+                             self.p.segment_accel, self.segment_gate)
         keep = tab.born[now[j]] >= tab.t_fix[old[i]]  # segments disjoint in time
         self.crossing.forget(self.succession.continue_segments(tab, now[j[keep]], old[i[keep]]))
         return now[tab.alive[now]]

@@ -111,24 +111,25 @@ def floor_vertical(P: np.ndarray, Pm: np.ndarray, slots: np.ndarray, Pmix: np.nd
 
 def reopen(candidates: np.ndarray, filt: MixtureFilter, predicted: tuple[np.ndarray, ...],
            row: np.ndarray, E: ETrackSet, tx: np.ndarray, rx: np.ndarray, p: InitParams,
-           gate_prob: float, floor: bool = True) -> np.ndarray:
+           gate_prob: float, floor: np.ndarray | bool = True) -> np.ndarray:
     """In place in the predicted (x, P, xm, Pm, c) (MixtureFilter.predict) of each of
-    `candidates` (confirmed tracks that lost a member this cycle) with at least MIN_SOUND
-    sound members: rebuild the mixture when their evidence-weighted altitude bands
-    resolve the altitude and contradict its prediction, floor its vertical variances
-    when the bands leave the altitude open (module doc); returns the rebuilt slots."""
+    `candidates` (confirmed tracks) with at least MIN_SOUND sound members: rebuild the
+    mixture when their evidence-weighted altitude bands resolve the altitude and
+    contradict its prediction, floor its vertical variances when the bands leave the
+    altitude open and `floor` (per candidate, or all: those that lost a member this
+    cycle; module doc) is set; returns the rebuilt slots."""
     x, P, xm, Pm, c = predicted
     rows = sound_members(row[candidates], E)
     enough = (rows >= 0).sum(axis=1) >= MIN_SOUND
     s, rows = candidates[enough], rows[enough]
+    floor = np.broadcast_to(floor, candidates.shape)[enough]
     if s.size == 0:
         return s
     xb, Pb, wb = altitude_bands(x[s][:, POS], E.y, E.R, E.base, rows, tx, rx, p, evidence=True)
     nx, nP, nc = filt.initial(xb, Pb, wb)
     cx, cP = imm.combine(nc, nx, nP)
     ok = np.sqrt(cP[:, 4, 4]) < filt.p.band_linear * (cx[:, 4] - filt.rx[0, 2])  # resolved
-    if floor:
-        floor_vertical(P, Pm, s[~ok], cP[~ok])
+    floor_vertical(P, Pm, s[~ok & floor], cP[~ok & floor])
     k = ok & contradicted(x[s], P[s], xb, Pb, wb, chi2_gate(gate_prob, 3))
     s = s[k]
     xm[s], Pm[s], c[s], x[s], P[s] = nx[k], nP[k], nc[k], cx[k], cP[k]

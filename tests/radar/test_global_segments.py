@@ -4,10 +4,12 @@ same aircraft, when the aircraft turned in between (dense1000 seed 9, aircraft 9
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from common.core.gating import chi2_gate
-from common.core.track_table import STATUS_NAME, Status
+from common.core.track_table import Status
 from common.deploy.config import RadarBase
 from common.radar.bistatic import project
 from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
@@ -15,7 +17,6 @@ from common.radar.fusion_params import FusionParams
 from common.radar.global_fusion import GlobalFusion
 from common.radar.global_segments import manoeuvre_envelope, segment_pairs
 from common.radar.plot_fusion import Plots
-from common.wire.radar_messages import etracks_from, gtracks_message
 
 GATE = chi2_gate(0.999, 6)
 P_TRACK = np.diag([60.0**2, 5.0**2, 60.0**2, 5.0**2, 300.0**2, 2.0**2])
@@ -91,26 +92,18 @@ def _numbers(segment_accel: float) -> list[list[int]]:
     out = []
     for k in range(30):
         t = float(k)
-        era = 0 if t < LOST else (1 if t >= BACK else None)
-        msgs = []
+        era = 0 if t < LOST else (1 if t >= BACK else None)  # None: no plot of the aircraft
         for b in BASES:
-            tracks = []
-            if era is not None:
-                trk = trackers.setdefault((b.id, era), ElementaryTracker(
-                    ElementaryParams(), RadarCrossingParams(enabled=False)))
+            trk = trackers.setdefault((b.id, era), ElementaryTracker(
+                ElementaryParams(), RadarCrossingParams(enabled=False)))
+            n = int(era is not None)
+            y = np.zeros(3)
+            if n:
                 y = project(_aircraft(t)[None], b.tx, b.rx)[0] + rng.standard_normal(3) * SIG
                 y[2] %= 2 * np.pi
-                r = trk.step(t, Plots(*(np.array([v]) for v in (*y, *SIG)), np.array([3])))
-                tracks = [{"id": 1 + 10 * era, "status": STATUS_NAME[Status(int(r.status[i]))],
-                           "x": r.x[i].tolist(), "P": r.P[i].ravel().tolist(),
-                           "score": float(r.score[i]), "n_ch": int(r.n_ch[i]),
-                           "updated": bool(r.updated[i]), "ambiguous": bool(r.ambiguous[i])}
-                          for i in range(len(r))]
-            msgs.append({"v": 1, "t": t, "base": b.id, "tracks": tracks})
-        for m in msgs:
-            for g in gf.push(*etracks_from(m)):
-                msg = gtracks_message(g)
-                out.append(sorted(tr["id"] for tr in msg["tracks"] if tr["status"] == "confirmed"))
+            r = trk.step(t, Plots(*(np.array([v])[:n] for v in (*y, *SIG)), np.array([3])[:n]))
+            for g in gf.push(b.id, dataclasses.replace(r, id=r.id + 10 * (era or 0))):
+                out.append(sorted(g.id[g.status == Status.CONFIRMED].tolist()))
     return out
 
 
