@@ -8,6 +8,12 @@ samples per second from the first put to the last sample drained, and the sample
 received and missed.
 
 Run: .venv/bin/python benchmarks/transport.py [--n N] [--size BYTES ...]
+
+Measured 2026-11-26 (2 cores, 50000 samples, none missed), samples/s with the Inbox on a
+queue.Queue (since then: SimpleQueue's timed wait can miss a shutdown, see Inbox) and, in
+brackets, on a queue.SimpleQueue: 200 B plain 157 k (239 k), stamped 114 k (196 k);
+7000 B plain 69 k (70 k), stamped 58 k (68 k). A pipeline key carries one message per
+scan and base or array.
 """
 
 from __future__ import annotations

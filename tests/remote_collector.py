@@ -36,7 +36,7 @@ def main() -> int:
     p.add_argument("--root", default="pf/v1")
     args = p.parse_args()
     stop = stop_on_signals()
-    q: queue.SimpleQueue[Item] = queue.SimpleQueue()
+    q: queue.Queue[Item] = queue.Queue()  # not SimpleQueue: see common.bus.transport.Inbox
 
     def on_sample(s: zenoh.Sample) -> None:  # tiny: stamp, copy, enqueue
         ts = s.timestamp

@@ -95,7 +95,7 @@ class Service:
         """Drain the inbox until SIGINT/SIGTERM; returns the process exit code."""
         signal.signal(signal.SIGINT, self.stop)
         signal.signal(signal.SIGTERM, self.stop)
-        signals = SignalBytes()  # in case a Python handler stays unrun (SignalBytes)
+        signals = SignalBytes()  # read by the loop, beside the Python handlers
         token = self.session.liveliness().declare_token(
             f"{self.root}/alive/{self.name}/{self.instance}"
         )
@@ -111,10 +111,6 @@ class Service:
                 if time.monotonic() >= next_metrics:
                     self.publish(f"metrics/{self.name}/{self.instance}", self.metrics())
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
-                    replaced = signals.rearm(self.stop)
-                    if replaced:
-                        self.log.error("shutdown signal handling replaced, installed again: %s",
-                                       ", ".join(replaced))
         finally:
             signals.close()
             token.undeclare()

@@ -137,11 +137,10 @@ def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
 
 class SignalBytes:
     """SIGINT and SIGTERM as bytes on a socket (signal.set_wakeup_fd, main thread only),
-    read by a loop beside its Python handlers. The C handler writes the byte whatever
-    happens next, while the Python handler can stay unrun: once, on a loaded machine, a
-    channel plotter ignored SIGINT and then SIGTERM for 5 s each, its loop polling the
-    inbox all along (tests/integration/test_shutdown.py; likely CPython 3.11's eval
-    breaker, recomputed by another Python thread, here Zenoh's callback thread)."""
+    read by a loop beside its Python handlers. CPython runs a Python handler only in the
+    main thread, at its next check of pending signals, whichever thread the kernel
+    delivered the signal to (here often one of Zenoh's); the C handler writes the byte
+    at delivery, so the loop sees the signal at its next poll in any case."""
 
     def __init__(self) -> None:
         self._r, self._w = socket.socketpair()
@@ -156,17 +155,6 @@ class SignalBytes:
         except BlockingIOError:
             return False
         return signal.SIGINT in data or signal.SIGTERM in data
-
-    def rearm(self, handler: Any) -> list[str]:
-        """Install ``handler`` for SIGINT and SIGTERM and this object's wakeup fd again;
-        returns what had been replaced since (by whom is not known: a service that
-        ignored both in tests/integration/test_shutdown.py had neither replaced at the
-        kernel level, which this makes visible in its log if it was at the Python level)."""
-        replaced = [s.name for s in (signal.SIGINT, signal.SIGTERM)
-                    if signal.signal(s, handler) != handler]
-        if signal.set_wakeup_fd(self._w.fileno(), warn_on_full_buffer=False) != self._w.fileno():
-            replaced.append("wakeup fd")
-        return replaced
 
     def close(self) -> None:
         signal.set_wakeup_fd(-1)
@@ -303,10 +291,18 @@ class Inbox:
 
     The callbacks copy the payload and return at once: no Zenoh call, no blocking, so a
     slow service never stalls the session's receive thread. ``depth`` is monitored.
+
+    A ``queue.Queue``, not a ``queue.SimpleQueue``: CPython 3.11's ``SimpleQueue.get``
+    with a timeout, interrupted by a signal whose handler (with the GIL taken back)
+    ends after the deadline, waits again with the negative remainder, which means for
+    ever. A service then sat in ``get`` with its stop flag set and ignored SIGINT and
+    SIGTERM (tests/integration/test_shutdown.py, 1 run in about 15 with 5 services; the
+    thread's wait seen in gdb: ``PyThread_acquire_lock_timed(microseconds=-61)``).
+    ``Queue.get`` waits through ``Lock.acquire``, which treats that remainder as a timeout.
     """
 
     def __init__(self) -> None:
-        self._q: queue.SimpleQueue[Envelope] = queue.SimpleQueue()
+        self._q: queue.Queue[Envelope] = queue.Queue()
 
     def on_sample(self, sample: zenoh.Sample) -> None:
         self._q.put(Envelope(str(sample.key_expr), sample.payload.to_bytes(),

@@ -39,7 +39,8 @@ class Stamped:
     """Zenoh callbacks stamp each sample with the monotonic clock and enqueue it."""
 
     def __init__(self) -> None:
-        self.q: queue.SimpleQueue[tuple[float, str, bytes, bytes | None]] = queue.SimpleQueue()
+        # a Queue, as common.bus.transport.Inbox: SimpleQueue.get(timeout) can miss the stop
+        self.q: queue.Queue[tuple[float, str, bytes, bytes | None]] = queue.Queue()
 
     def on_sample(self, sample: zenoh.Sample) -> None:
         self.q.put((time.monotonic(), str(sample.key_expr), sample.payload.to_bytes(),
