@@ -77,9 +77,13 @@ class BearingImm:
                 ll[:, j] = gaussian_loglik(np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0]), S)
             moved = alpha > 0
             mu[rows[moved]] = probabilities(c[rows[moved]], ll[moved])
+        return (mu, xm, Pm, *self.combined(mu, xm, Pm))
+
+    def combined(self, mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The moment-matched x (N, n), P of the model states."""
         x, P = combine(mu, _near(xm, xm[:, :1]), Pm)
         x[:, 0] = wrap_2pi(x[:, 0])
-        return mu, xm, Pm, x, P
+        return x, P
 
 
 def _near(xm: np.ndarray, ref: np.ndarray) -> np.ndarray:

@@ -39,6 +39,7 @@ from common.sonar.bearing_crossing import BearingCrossing
 from common.sonar.bearing_history import BearingHistory
 from common.sonar.bearing_imm import BearingImm
 from common.sonar.bearing_merge import merged_tentative
+from common.sonar.bearing_pairs import centroid_measurements, common_mode_update, memory_pairs, ordered
 from common.sonar.bearing_assoc import associate
 from common.sonar.bearing_model import (
     detection_probability,
@@ -239,6 +240,14 @@ class BearingTracker:
             keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
                                             rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
+        pairs = np.zeros((0, 2), dtype=np.intp)
+        if self.crossing is not None and self.crossing.memory:  # 004 memory pairs
+            det_b = np.full(idx.size, np.nan)
+            det_b[rows] = z[cols_, 0]
+            pairs = memory_pairs(x[:, 0], P[:, 0, 0], conf & ambiguous)
+            release = ordered(pairs, x[:, 0], P[:, 0, 0], det_b)
+            alpha[pairs[release].ravel()] = 1.0
+            pairs = pairs[~release]
         R = diagonal_covariances(Rd[cols_])
 
         if idx.size and self.imm is not None:  # 000 x^(k/k) per model, combined
@@ -249,6 +258,8 @@ class BearingTracker:
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
 
+        if pairs.size:  # 004 memory pairs' centroids
+            x, P = self._centroids(idx, pairs, x, P, rows, z[cols_, 0], Rd[cols_, 0])
         dL = missed_increment(p_d)
         dL[rows] = quality_increment(p_d[rows], p_fa[cols_], self.beam, detS, d2, self.m)  # 000 claim 4
         L = tab.score[idx] + dL  # 000 L(k) = L(k-1) + dL
@@ -281,6 +292,19 @@ class BearingTracker:
         self.history.maybe_compact(tab.uid[live])
         self.t = t
         return self._cycle(t, live)
+
+    def _centroids(self, idx, pairs, x, P, rows, zb, rb):
+        det_b, det_v = np.full(idx.size, np.nan), np.full(idx.size, np.nan)
+        det_b[rows], det_v[rows] = zb, rb
+        zc, rc, seen = centroid_measurements(pairs, x[:, 0], P[:, 0, 0], det_b, det_v)
+        if self.imm is None:
+            xm, Pm = x[:, None].copy(), P[:, None].copy()
+            common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
+            return xm[:, 0], Pm[:, 0]
+        xm, Pm = self.table.xm[idx], self.table.Pm[idx]
+        common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
+        self.table.xm[idx], self.table.Pm[idx] = xm, Pm
+        return self.imm.combined(self.table.mu[idx], xm, Pm)
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""

@@ -1,0 +1,88 @@
+"""Common-mode update of a pair of tracks in seed 004's memory mode (deviation from 004,
+stated here; step 5 of common.sonar.bearing_tracker).
+
+004 claim 5 freezes an ambiguous track: no detection of the crossing may update it, since
+it could be the other target's. What is ambiguous is which detection belongs to which
+track of the pair, a permutation; the pair's centroid c = (b_1 + b_2) / 2 does not
+depend on it. The centroid of the detections GNN gave the pair measures c, so c is
+updated and the pair's difference b_1 - b_2 stays on 004's memory (extrapolation).
+Without it a bearing-rate change common to both contacts, as an own-ship turn makes, was
+coasted through: on sonar_hold_cross_turn the frozen pair overshot the targets by 3 deg
+and re-acquired on the wrong detections (benchmarks/crossing_seeds.py, cross_turn 67).
+
+Measurement of c (bearing only): two detections, their mean, variance (R_1 + R_2) / 4; one
+detection, it is either contact, c +- d / 2 with d the predicted difference, so its
+variance is R + (d^2 + var d) / 4 (moment matching of the two equally likely cases); none,
+no update. The joint update of (x_1, x_2) with h_c = [h, h] / 2, per IMM model, keeps the
+marginals and drops the cross-covariance it creates. A centroid innovation beyond the
+gate (a clutter detection in the pair's GNN result) is not used.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from common.core.angles import wrap_2pi, wrap_pi
+
+GATE = 10.83  # chi-square(1) 0.999 quantile of the centroid innovation
+SIGN_SIGMAS = 3.0  # the pair's order is known when |b_1 - b_2| >= 3 sigma
+
+
+def memory_pairs(brg: np.ndarray, var: np.ndarray, frozen: np.ndarray) -> np.ndarray:
+    """Pairs (K, 2) of track rows: frozen tracks that are each other's nearest frozen
+    neighbour in bearing (d^2 = (b_i - b_j)^2 / (var_i + var_j))."""
+    idx = np.flatnonzero(frozen)
+    if idx.size < 2:
+        return np.zeros((0, 2), dtype=np.intp)
+    d = wrap_pi(brg[idx, None] - brg[None, idx])
+    d2 = d**2 / (var[idx, None] + var[None, idx])
+    np.fill_diagonal(d2, np.inf)
+    near = np.argmin(d2, axis=1)
+    first = np.flatnonzero((near[near] == np.arange(idx.size)) & (np.arange(idx.size) < near))
+    return np.column_stack([idx[first], idx[near[first]]])
+
+
+def ordered(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray, det_brg: np.ndarray) -> np.ndarray:
+    """Mask of the pairs whose order is known: the predicted difference d = b_1 - b_2 is at
+    least SIGN_SIGMAS of its sigma from 0 (var d = P_1 + P_2), and GNN gave each track a
+    detection, in that order."""
+    a, b = pairs[:, 0], pairs[:, 1]
+    d = wrap_pi(brg[a] - brg[b])
+    dz = wrap_pi(det_brg[a] - det_brg[b])  # NaN without both detections
+    return (np.abs(d) >= SIGN_SIGMAS * np.sqrt(P00[a] + P00[b])) & (d * dz > 0)
+
+
+def centroid_measurements(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray,
+                          det_brg: np.ndarray, det_var: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centroid bearing, its variance and a mask of the pairs measured, from each track's
+    predicted bearing brg (N,) and variance P00, and the bearing det_brg (N,) and variance
+    det_var of the detection GNN gave it (NaN: none)."""
+    a, b = pairs[:, 0], pairs[:, 1]
+    za, zb = det_brg[a], det_brg[b]
+    has_a, has_b = ~np.isnan(za), ~np.isnan(zb)
+    d = wrap_pi(brg[a] - brg[b])
+    one = np.where(has_a, za, zb)
+    zc = np.where(has_a & has_b, wrap_2pi(zb + wrap_pi(za - zb) / 2.0), one)
+    spread = (d**2 + P00[a] + P00[b]) / 4.0
+    rc = np.where(has_a & has_b, (np.nan_to_num(det_var[a]) + np.nan_to_num(det_var[b])) / 4.0,
+                  np.where(has_a, det_var[a], det_var[b]) + spread)
+    return zc, rc, has_a | has_b
+
+
+def common_mode_update(xm: np.ndarray, Pm: np.ndarray, pairs: np.ndarray, zc: np.ndarray,
+                       rc: np.ndarray) -> np.ndarray:
+    """Update the model states xm (N, J, n), Pm (N, J, n, n) of both tracks of each pair in
+    place with its centroid measurement zc, rc (a pair is used if every model's centroid
+    innovation passes GATE); returns the mask of the pairs updated."""
+    a, b = pairs[:, 0], pairs[:, 1]
+    ph_a, ph_b = Pm[a, :, :, 0], Pm[b, :, :, 0]  # P h' per model (K, J, n)
+    S = (ph_a[..., 0] + ph_b[..., 0]) / 4.0 + rc[:, None]  # h_c P h_c' + r_c
+    nu = wrap_pi(zc[:, None] - (xm[b, :, 0] + wrap_pi(xm[a, :, 0] - xm[b, :, 0]) / 2.0))
+    ok = np.all(nu**2 / S <= GATE, axis=1)
+    for k, ph in ((a[ok], ph_a[ok]), (b[ok], ph_b[ok])):
+        K = ph / (2.0 * S[ok, :, None])  # gain of track k on the centroid: P_k h' / 2 S
+        xm[k] += K * nu[ok, :, None]
+        Pm[k] -= K[..., :, None] * ph[..., None, :] / 2.0
+        xm[k, :, 0] = wrap_2pi(xm[k, :, 0])
+    return ok
