@@ -52,6 +52,31 @@ def ordered(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray, det_brg: np.nda
     return (np.abs(d) >= SIGN_SIGMAS * np.sqrt(P00[a] + P00[b])) & (d * dz > 0)
 
 
+def release(frozen: np.ndarray, brg: np.ndarray, P00: np.ndarray, rows: np.ndarray,
+            det_brg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The tracks (N,) mask released from the memory mode for this scan (their pair's order is
+    known, `ordered`) and the pairs (K, 2) that stay frozen, from the frozen mask, the
+    predicted bearings brg and variances P00 (N,), and the GNN pairs: track rows and
+    their detections' bearings det_brg."""
+    by_track = np.full(brg.size, np.nan)
+    by_track[rows] = det_brg
+    pairs = memory_pairs(brg, P00, frozen)
+    known = ordered(pairs, brg, P00, by_track)
+    released = np.zeros(brg.size, dtype=bool)
+    released[pairs[known].ravel()] = True
+    return released, pairs[~known]
+
+
+def centroid_update(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray, rows: np.ndarray,
+                    det_brg: np.ndarray, det_var: np.ndarray, xm: np.ndarray, Pm: np.ndarray) -> None:
+    """The common-mode update of the frozen pairs, in place on the model states xm, Pm (N, J,
+    ...), from the GNN pairs: track rows, their detections' bearings and variances."""
+    by_track, var = np.full(brg.size, np.nan), np.full(brg.size, np.nan)
+    by_track[rows], var[rows] = det_brg, det_var
+    zc, rc, seen = centroid_measurements(pairs, brg, P00, by_track, var)
+    common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
+
+
 def centroid_measurements(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray,
                           det_brg: np.ndarray, det_var: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -38,13 +38,13 @@ from common.core.angles import wrap_2pi
 from common.sonar.bearing_crossing import BearingCrossing
 from common.sonar.bearing_history import BearingHistory
 from common.sonar.bearing_imm import BearingImm
+from common.sonar.bearing_measurements import bearing_sigmas, detection_measurements, measurement_variances
 from common.sonar.bearing_merge import merged_tentative
-from common.sonar.bearing_pairs import centroid_measurements, common_mode_update, memory_pairs, ordered
+from common.sonar.bearing_pairs import centroid_update, release
 from common.sonar.bearing_assoc import associate
 from common.sonar.bearing_model import (
     detection_probability,
     false_alarm_probability,
-    linear_array_sigma,
     measurement_matrix,
     missed_increment,
     quality_increment,
@@ -54,7 +54,6 @@ from common.core.crossing import CrossingParams
 from common.core.kalman import diagonal_covariances, predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
-from common.core.rejection import Rejected
 from common.core.track_table import Status, TrackTable
 
 
@@ -240,14 +239,10 @@ class BearingTracker:
             keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
                                             rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
-        pairs = np.zeros((0, 2), dtype=np.intp)
-        if self.crossing is not None and self.crossing.memory:  # 004 memory pairs
-            det_b = np.full(idx.size, np.nan)
-            det_b[rows] = z[cols_, 0]
-            pairs = memory_pairs(x[:, 0], P[:, 0, 0], conf & ambiguous)
-            release = ordered(pairs, x[:, 0], P[:, 0, 0], det_b)
-            alpha[pairs[release].ravel()] = 1.0
-            pairs = pairs[~release]
+        frozen = np.zeros((0, 2), dtype=np.intp)
+        if self.crossing is not None and self.crossing.memory:  # 004 memory-mode pairs
+            released, frozen = release(conf & ambiguous, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+            alpha[released] = 1.0
         R = diagonal_covariances(Rd[cols_])
 
         if idx.size and self.imm is not None:  # 000 x^(k/k) per model, combined
@@ -258,8 +253,8 @@ class BearingTracker:
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
 
-        if pairs.size:  # 004 memory pairs' centroids
-            x, P = self._centroids(idx, pairs, x, P, rows, z[cols_, 0], Rd[cols_, 0])
+        if frozen.size:  # the frozen pairs' centroids (common.sonar.bearing_pairs)
+            x, P = self._centroids(idx, frozen, x, P, rows, z[cols_, 0], Rd[cols_, 0])
         dL = missed_increment(p_d)
         dL[rows] = quality_increment(p_d[rows], p_fa[cols_], self.beam, detS, d2, self.m)  # 000 claim 4
         L = tab.score[idx] + dL  # 000 L(k) = L(k-1) + dL
@@ -285,7 +280,7 @@ class BearingTracker:
         self._group_lines()
 
         live = tab.active_indices()
-        ok = ~ambiguous[rows]  # the register: associated detections, not the 004-flagged ones
+        ok = alpha[rows] == 1.0  # the register: the detections used in full (not 004's frozen)
         reg = np.r_[cols_[ok], np.flatnonzero(unused)]
         self.history.append(t, np.r_[tab.uid[idx[rows[ok]]], tab.uid[opened]], z[reg, 0],
                             np.sqrt(Rd[reg, 0]), own_x, own_y)
@@ -293,18 +288,16 @@ class BearingTracker:
         self.t = t
         return self._cycle(t, live)
 
-    def _centroids(self, idx, pairs, x, P, rows, zb, rb):
-        det_b, det_v = np.full(idx.size, np.nan), np.full(idx.size, np.nan)
-        det_b[rows], det_v[rows] = zb, rb
-        zc, rc, seen = centroid_measurements(pairs, x[:, 0], P[:, 0, 0], det_b, det_v)
+    def _centroids(self, idx: np.ndarray, pairs: np.ndarray, x: np.ndarray, P: np.ndarray,
+                   rows: np.ndarray, zb: np.ndarray, rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """x, P after the common-mode update of the frozen pairs (per IMM model)."""
+        tab, imm = self.table, self.imm is not None
+        xm, Pm = (tab.xm[idx], tab.Pm[idx]) if imm else (x[:, None].copy(), P[:, None].copy())
+        centroid_update(pairs, x[:, 0], P[:, 0, 0], rows, zb, rb, xm, Pm)
         if self.imm is None:
-            xm, Pm = x[:, None].copy(), P[:, None].copy()
-            common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
             return xm[:, 0], Pm[:, 0]
-        xm, Pm = self.table.xm[idx], self.table.Pm[idx]
-        common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
-        self.table.xm[idx], self.table.Pm[idx] = xm, Pm
-        return self.imm.combined(self.table.mu[idx], xm, Pm)
+        tab.xm[idx], tab.Pm[idx] = xm, Pm
+        return self.imm.combined(tab.mu[idx], xm, Pm)
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""
@@ -375,42 +368,3 @@ class BearingTracker:
             return "confirmed", self.history.rows(int(tab.uid[slot]))
         uid = self.history.retired_uid(track_id)
         return None if uid is None else ("deleted", self.history.rows(uid))
-
-
-def bearing_sigmas(p: TrackerParams, array_kind: str, sigma0: float, brg: np.ndarray,
-                   amp: np.ndarray, heading: float) -> np.ndarray:
-    """sigma^mess of each bearing: 000 claim 6 for linear arrays, sigma0 otherwise."""
-    if array_kind == "linear":
-        return linear_array_sigma(brg, amp, heading, sigma0, math.radians(p.endfire_deg))
-    return np.full(np.shape(brg), sigma0)
-
-
-def measurement_variances(p: TrackerParams, array_kind: str, sigma0: float, brg: np.ndarray,
-                          level: np.ndarray, heading: float) -> np.ndarray:
-    """Diagonal of 000 R per measurement (K, m): sigma_brg^2, sigma_a^2[, sigma_f^2]."""
-    cols = [bearing_sigmas(p, array_kind, sigma0, brg, 10.0 ** (level / 10.0), heading) ** 2,
-            np.full(brg.shape, p.sigma_amp_db**2)]
-    if p.mode == "narrowband":
-        cols.append(np.full(brg.shape, p.sigma_freq_hz**2))
-    return np.column_stack(cols)
-
-
-def detection_measurements(
-    p: TrackerParams, array_kind: str, sigma0: float, t_last: float | None, t: float,
-    brg: np.ndarray, amp: np.ndarray, heading: float, freq: np.ndarray | None,
-    sbrg: np.ndarray | None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A detection list of time t (after t_last) as 000's measurements, for both modes: levels
-    (K,) dB, z (K, m) = [brg, level[, freq]], diagonal of R (K, m); sbrg replaces the law."""
-    if t_last is not None and not t > t_last:
-        raise Rejected("time_order", f"t={t} is not after the previous cycle t={t_last}")
-    narrowband = p.mode == "narrowband"
-    if narrowband and freq is None:
-        raise ValueError("narrowband tracking needs detection frequencies")
-    brg = wrap_2pi(np.asarray(brg, dtype=float).reshape(-1))
-    level = 10.0 * np.log10(np.asarray(amp, dtype=float).reshape(-1))
-    cols = [brg, level] + ([np.asarray(freq, dtype=float).reshape(-1)] if narrowband else [])
-    Rd = measurement_variances(p, array_kind, sigma0, brg, level, heading)
-    if sbrg is not None:
-        Rd[:, 0] = np.square(np.asarray(sbrg, dtype=float).reshape(-1))
-    return level, np.column_stack(cols), Rd

@@ -77,7 +77,8 @@ from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
 from common.core.kalman import diagonal_covariances, predict, update
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.sonar.bearing_model import detection_probability, measurement_matrix
-from common.sonar.bearing_tracker import Cycle, TrackerParams, detection_measurements
+from common.sonar.bearing_measurements import detection_measurements
+from common.sonar.bearing_tracker import Cycle, TrackerParams
 from common.sonar.mht_models import branch
 from common.sonar.mht_hypotheses import (LN_2PI, heaviest, hit_weights, merge_apply, merge_clusters,
                                          miss_weights, mixture_moments, pair_distance2, prune,
