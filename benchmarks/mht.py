@@ -85,7 +85,7 @@ from benchmarks import bearing_tracker as scale_scene  # noqa: E402
 from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import parse, section  # noqa: E402
-from common.evaluation.crossing_eval import EvalParams, Frame, associate, separation  # noqa: E402
+from common.evaluation.crossing_eval import EvalParams, Frame, Numbers, associate, separation  # noqa: E402
 from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
 from common.sonar.bearing_tracker import BearingTracker  # noqa: E402
 from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams  # noqa: E402
@@ -182,7 +182,8 @@ def run_one(doc: dict[str, Any], mode: str, seed: int, sc: Score) -> None:
     cfg = parse(copy.deepcopy(doc))
     scn = load_scenario(doc)
     trk = build(doc, mode)
-    last: dict[int, int] = {}
+    last: dict[int, tuple[int, int]] = {}
+    numbers = Numbers()
     swaps = breaks = 0
     near_truth: dict[int, bool] = {}
     filt: dict[tuple[int, float], float] = {}
@@ -204,7 +205,7 @@ def run_one(doc: dict[str, Any], mode: str, seed: int, sc: Score) -> None:
         f = Frame.of(t, tr["id"], tb, c.ids, c.x[:, 0], c.confirmed, c.ambiguous, 1)
         trk_of = associate(f, EVAL)
         sep = separation(f, EVAL)
-        live = set(c.ids.tolist())
+        numbers.step(f)
         for j, (k, s) in enumerate(zip(trk_of.tolist(), sep.tolist())):
             if k < 0:
                 continue
@@ -214,10 +215,10 @@ def run_one(doc: dict[str, Any], mode: str, seed: int, sc: Score) -> None:
             sc.n_se += 1
             if s > EVAL.resolved:
                 prev = last.get(int(f.truth_ids[j]))
-                if prev is not None and prev != k:
-                    swaps += prev in live
-                    breaks += prev not in live
-                last[int(f.truth_ids[j])] = k
+                if prev is not None and prev[0] != k:
+                    swaps += numbers.live(prev)
+                    breaks += not numbers.live(prev)
+                last[int(f.truth_ids[j])] = numbers.tag(k)
         for i, b, conf in zip(c.ids.tolist(), c.x[:, 0].tolist(), c.confirmed.tolist()):
             if conf:
                 close = tb.size > 0 and bool((np.abs(wrap_pi(b - tb)) < EVAL.gate * DEG).any())

@@ -18,6 +18,12 @@ Swap: at a cycle where the truth is resolved (every other truth farther than
 cycle while that previous track is still live. Cycles where the truths are closer
 than `resolved` are skipped: there the nearest track is decided by noise, not by the
 tracker. A number change after the previous track was deleted is not a swap (a break).
+"Still live" is the track, not its number (`Numbers`): the single-hypothesis tracker
+reuses the number of a deleted track at once, often in the same cycle, for a new
+tentative track. Until 2026-11-26 (session 17) a number reused so counted as live, and
+a lost track replaced by a new number was scored a swap (GNN: 5 of the 7 swap runs of
+benchmarks/crossing_seeds.py's sonar_cross_* scenes over seeds 1-480 with that session's
+tracker; numbers there).
 Lost: after its first association, the truth has no confirmed track within `gate` for
 more than `lost_cycles` consecutive cycles.
 Flag: over the cycles where a truth is associated, the fraction whose track is flagged
@@ -126,9 +132,36 @@ def separation(f: Frame, p: EvalParams) -> np.ndarray:
     return d.min(axis=1) if d.size else np.zeros(0)
 
 
+class Numbers:
+    """Which holder of each track number is live: a number seen confirmed and then absent
+    or not confirmed has lost its holder (deleted, or demoted); a later confirmed track
+    under it is another holder."""
+
+    def __init__(self) -> None:
+        self.holder: dict[int, int] = {}  # number -> holder count
+        self.confirmed: set[int] = set()
+
+    def step(self, f: Frame) -> set[int]:
+        """The numbers of the confirmed tracks of frame f, holders updated."""
+        now = set(f.track_ids[f.confirmed].tolist())
+        for k in self.confirmed - now:
+            self.holder[k] = self.holder.get(k, 0) + 1
+        self.confirmed = now
+        return now
+
+    def tag(self, k: int) -> tuple[int, int]:
+        """The track under number k now: (number, holder)."""
+        return k, self.holder.get(k, 0)
+
+    def live(self, tagged: tuple[int, int]) -> bool:
+        """True when that track (number, holder) is still a confirmed track."""
+        return tagged[0] in self.confirmed and self.tag(tagged[0]) == tagged
+
+
 def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
     """Swaps, lost truths and flag counts over the frames of one run (time order)."""
-    last: dict[int, int] = {}
+    last: dict[int, tuple[int, int]] = {}
+    numbers = Numbers()
     seen: set[int] = set()
     gap: dict[int, int] = {}
     lost: set[int] = set()
@@ -137,7 +170,7 @@ def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
     for f in frames:
         tracks = associate(f, p)
         sep = separation(f, p)
-        live = set(f.track_ids.tolist())
+        numbers.step(f)
         flagged = dict(zip(f.track_ids.tolist(), f.ambiguous.tolist()))
         for truth, trk, s in zip(f.truth_ids.tolist(), tracks.tolist(), sep.tolist()):
             if trk < 0:
@@ -153,9 +186,9 @@ def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
                     flags[row] += (int(flagged[trk]), 1)
             if s > p.resolved:
                 prev = last.get(truth)
-                if prev is not None and prev != trk and prev in live:
+                if prev is not None and prev[0] != trk and numbers.live(prev):
                     swaps += 1
-                last[truth] = trk
+                last[truth] = numbers.tag(trk)
     return RunScore(swaps, len(lost), (int(flags[0, 0]), int(flags[0, 1])),
                     (int(flags[1, 0]), int(flags[1, 1])))
 

@@ -68,6 +68,17 @@ def test_renumbering_after_deletion_is_a_break_not_a_swap() -> None:
     assert (s.swaps, s.lost) == (0, 0)  # one uncovered cycle <= lost_cycles
 
 
+def test_a_deleted_tracks_number_reused_at_once_is_another_track() -> None:
+    """The single-hypothesis tracker gives a deleted track's number to a new tentative track
+    in the same cycle: the truth's new number is then a break, not a swap (the number
+    stayed live, the track did not)."""
+    frames = [frame(0.0, [0.0], {3: 0.0}), frame(1.0, [0.0], {3: 9.0, 4: 0.0}, conf={4}),
+              frame(2.0, [0.0], {3: 9.0, 4: 0.0})]
+    assert score_run(frames, P).swaps == 0
+    kept = [frames[0], frame(1.0, [0.0], {3: 9.0, 4: 0.0}), frames[2]]  # 3 stays confirmed
+    assert score_run(kept, P).swaps == 1
+
+
 def test_lost_after_more_than_lost_cycles_uncovered() -> None:
     frames = [frame(0.0, [0.0], {3: 0.0})]
     frames += [frame(float(k), [0.0], {3: 9.0}) for k in range(1, 4)]  # outside the gate
