@@ -5,7 +5,8 @@ detection a track leaving the ambiguity may keep.
 
 Deviations (stated): tentative tracks are left out (alpha = 1, not ambiguous): a
 clutter track next to a confirmed track would otherwise freeze it in memory mode; the
-re-acquisition rule of `BearingCrossing.exit_pairs` is not in 004.
+re-acquisition rule of `BearingCrossing.exit_pairs` is not in 004; nor are the rules on
+pairs of frozen tracks (release, centroid) of common.sonar.bearing_pairs.
 """
 
 from __future__ import annotations

@@ -9,8 +9,11 @@ time only:
   4. seed 004 crossing management on the confirmed tracks: alpha as gain weight (in
      memory mode the IMM predicts with its quiet Q, common.sonar.bearing_imm); a track
      leaving the ambiguity keeps its detection only if no other confirmed track's
-     prediction is nearer to it (deviation; common.sonar.bearing_crossing);
-  5. Kalman update with the Joseph-form covariance (000 P(k/k));
+     prediction is nearer to it (deviation; common.sonar.bearing_crossing); a pair of
+     frozen tracks whose order is sure is released for the scan (deviation;
+     common.sonar.bearing_pairs);
+  5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
+     centroids from their detections (deviation; common.sonar.bearing_pairs);
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
      for a miss; tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2);
      confirmed deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
