@@ -273,33 +273,50 @@ deg. The rule was shaped on 304 after seeing it; on seeds 321-480 (not looked at
 the six sonar_cross_* scenes alone, before and after alike: 0 swap runs, 0 break runs,
 false tracks 0.01-0.02 per 100 cycles, RMSE 0.38-0.56 deg, every scene to the digit (no
 evidence either way there; the hold_cross_* scenes were not run on those seeds).
-GNN, session 17 (2026-11-26, the tracker of 5883586; baseline run again: seeds 1-160 37 swap
-runs, seeds 161-320 17, the seeds listed above):
+GNN, session 17 (2026-11-26; baseline the tracker of 5883586, seeds 1-160 37 swap runs and
+161-320 17, the seeds listed above):
   - 004 flags made symmetric (a flagged confirmed track flags its nearest confirmed
     neighbour in the g metric too, alpha = 0 for both; traced on cross_slow 26: #1 flagged
     at t = 815 s, #2 not, and #2 took T1's detections until it was flagged beside #1):
     seeds 1-160 37 -> 32 (cross_slow 9 -> 6, cross_turn 7 -> 6, cross_uneq 1 -> 0), seeds
     161-320 17 -> 18 (cross_turn 297, cross_slow 241 and 287 new); not kept.
-  - What the swap runs of seeds 1-160 are, by the issue's definitions (the Scorer of
-    benchmarks/sonar_hold.py: a number another truth was resolved on is a swap, a new
-    number a break; crossing_eval counts a new number as a swap while the old track
-    lives): on the sonar_hold_cross_* scenes every one is an exchange, nearly all scored
-    while both tracks coast in 004's memory mode; on the sonar_cross_* scenes 11 of the
-    17 are new numbers only (the old track drifted off on its memory-mode rate, e.g.
-    4dpm_uneq 2), 6 hold an exchange (4dpm_uneq 101 and 153, 4dpm_eq 101 and 152, 2dpm_eq
-    126, 1dpm_uneq 77). By those definitions 26 swap runs in 1600 (1.6 %).
-  - cross_turn 67 (five of its swap runs are scored at t = 635 s): the pair entered memory
-    mode at t = 375 s, 3.2 deg apart, with bearing rates +2.99 and +0.42 deg/min (T1 +2.4,
-    T2 +0.2); the own-ship turn (t = 360-540 s) brought the targets' to about +1.0 and
-    -0.8. At t = 530 s the frozen extrapolations were 3.5 deg apart and both left memory
-    mode; #1 predicted at 95.05 deg (T1 at 92.29) took, 7.4 deg off, T2's detection at 87.70
-    (its gate grown over 160 s of coasting; the exit rule covers only the scan of the exit,
-    and #1 had no detection at t = 530 s), and from t = 540 s both tracks coast side by side
-    at 88-90 deg beside T2 while T1's detections (92-95 deg) go to neither, for minutes
-    (eq. 13 tests the predictions, which stay together). The bearing-rate change of a
-    turn is the own ship's velocity change across the line of sight over the range, which
-    a bearing tracker does not have (TMA does, in another service); the MHT keeps
-    hypotheses that follow the detections.
+  - Traced, cross_turn 67 (five of its swap runs are scored at t = 635 s): the pair entered
+    memory mode at t = 375 s, 3.2 deg apart, with bearing rates +2.99 and +0.42 deg/min
+    (T1 +2.4, T2 +0.2); the own-ship turn (t = 360-540 s) brought the targets' to about
+    +1.0 and -0.8. At t = 530 s the frozen extrapolations were 3.5 deg apart and both left
+    memory mode; #1 predicted at 95.05 deg (T1 at 92.29) took, 7.4 deg off, T2's detection
+    at 87.70 (its gate grown over 160 s of coasting; the exit rule covers only the scan of
+    the exit, and #1 had no detection at t = 530 s), and from t = 540 s both tracks coast
+    side by side at 88-90 deg beside T2 while T1's detections (92-95 deg) go to neither,
+    for minutes (eq. 13 tests the predictions, which stay together). Likewise 4dpm_uneq
+    2 and 101: a young track's bearing rate 1.1-1.7 deg/min short of its target's, coasted
+    through a 120 s memory mode.
+  - Kept: common.sonar.bearing_pairs. A pair of frozen tracks (mutual nearest) is released
+    for the scan when the prediction is sure of its order (|b_1 - b_2| >= 3 sigma of the
+    difference) and GNN gave it two detections in that order; else its centroid is
+    updated from its detections (association-free), the difference staying on 004's
+    memory. Scored with crossing_eval.Numbers (8cff97a: a number reused at once by the GNN
+    tracker is not the old track; the baseline runs again with it), swap runs (break runs):
+      seeds     baseline              pairs
+      1-160     29 (17, hold5 1)      1 (4, hold5 1): 2dpm_eq 65
+      161-320   16 (5, hold5 1)       2 (3, hold5 0): cross_turn 195, 2dpm_uneq 286
+      321-480   not run               0 (4, hold5 2)
+    Bearing RMSE per scene 0.51-0.94 -> 0.39-0.73 deg (the hold scenes 0.55-0.72 ->
+    0.41-0.45, the MHT's 0.38-0.43), false tracks the same (<= 0.04 per 100 cycles).
+    The three left: 65, a new number for T2 while its old track, drawn off, lives on;
+    286, T2's young track confirmed at -3.5 deg/min (T2 -1.0) dives through T1 at
+    t = 100 s, before the crossing; 195, GNN gives #3 (on T1, T1's detection missed) T2's
+    detection 4 deg off at t = 580 s, the pair enters memory mode with #3 at -2.4
+    deg/min, between the targets, and is not released while the targets draw apart (not
+    traced further); T1 gets a new track at t = 735 s.
+  - Tried, not kept: the release decided by the likelihood ratio of the two pairings (the
+    pair's predictions, full measurement incl. level; >= 1000) instead of the 3 sigma
+    order: seeds 1-40 1 -> 12 swap runs (cross_slow 11: near the predicted crossing a
+    wrong-order prediction meets well-separated detections).
+MHT, seeds 321-480 (not looked at before; scorer of before 8cff97a, which can only turn a
+swap into a break): 2 swap runs, both on sonar_hold_cross_slow (361, 478; not traced),
+break runs cross_uneq 342, cross_turn 342, cross_slow 444 and 478, hold5 411 and 423;
+the six sonar_cross_* scenes 0 and 0; RMSE 0.38-0.56 deg.
 """
 
 from __future__ import annotations

@@ -296,7 +296,7 @@ class BearingTracker:
         """x, P after the common-mode update of the frozen pairs (per IMM model)."""
         tab, imm = self.table, self.imm is not None
         xm, Pm = (tab.xm[idx], tab.Pm[idx]) if imm else (x[:, None].copy(), P[:, None].copy())
-        centroid_update(pairs, x[:, 0], P[:, 0, 0], rows, zb, rb, xm, Pm)
+        centroid_update(pairs, rows, zb, rb, xm, Pm)
         if self.imm is None:
             return xm[:, 0], Pm[:, 0]
         tab.xm[idx], tab.Pm[idx] = xm, Pm
