@@ -293,22 +293,26 @@ GNN, session 17 (2026-11-26; baseline the tracker of 5883586, seeds 1-160 37 swa
     through a 120 s memory mode.
   - Kept: common.sonar.bearing_pairs. A pair of frozen tracks (mutual nearest) is released
     for the scan when the prediction is sure of its order (|b_1 - b_2| >= 3 sigma of the
-    difference) and GNN gave it two detections in that order; else its centroid is
-    updated from its detections (association-free), the difference staying on 004's
-    memory. Scored with crossing_eval.Numbers (8cff97a: a number reused at once by the GNN
-    tracker is not the old track; the baseline runs again with it), swap runs (break runs):
-      seeds     baseline              pairs
-      1-160     29 (17, hold5 1)      1 (4, hold5 1): 2dpm_eq 65
-      161-320   16 (5, hold5 1)       2 (3, hold5 0): cross_turn 195, 2dpm_uneq 286
-      321-480   not run               0 (4, hold5 2)
-    Bearing RMSE per scene 0.51-0.94 -> 0.39-0.73 deg (the hold scenes 0.55-0.72 ->
-    0.41-0.45, the MHT's 0.38-0.43), false tracks the same (<= 0.04 per 100 cycles).
-    The three left: 65, a new number for T2 while its old track, drawn off, lives on;
-    286, T2's young track confirmed at -3.5 deg/min (T2 -1.0) dives through T1 at
-    t = 100 s, before the crossing; 195, GNN gives #3 (on T1, T1's detection missed) T2's
-    detection 4 deg off at t = 580 s, the pair enters memory mode with #3 at -2.4
-    deg/min, between the targets, and is not released while the targets draw apart (not
-    traced further); T1 gets a new track at t = 735 s.
+    difference) and GNN gave it two detections in that order; else, given two detections,
+    its centroid is updated from theirs (association-free), the difference staying on
+    004's memory. Scored with crossing_eval.Numbers (8cff97a: a number reused at once by
+    the GNN tracker is not the old track; the baseline runs again with it), swap runs
+    (break runs on the crossing scenes, on sonar_hold5):
+      seeds     baseline         pairs
+      1-160     29 (17, 1)       0 (3, 1)
+      161-320   16 (5, 1)        0 (1, 0)
+      321-480   not run          1 (3, 2): cross_turn 328
+    Bearing RMSE per scene 0.51-0.94 -> 0.39-0.74 deg (the hold scenes 0.55-0.72 ->
+    0.42-0.45, the MHT's 0.38-0.43), false tracks the same (<= 0.04 per 100 cycles).
+    cross_turn 328: the pair sits between the targets (90-91 deg, the targets at 94 and
+    87.5) with rates +0.6 and -0.8 deg/min, converging while the targets diverge (their
+    crossing was at t = 450 s): its difference is wrong, never sure, so never released,
+    and the predictions cross at t = 685 s (the scorer's exchange), T1 gets a new track
+    at t = 710 s. A first version also took a pair's one detection for its centroid (as
+    either contact: c +- d / 2, variance R + (d^2 + var d) / 4): 1 / 2 / 0 swap runs on
+    the three seed ranges (2dpm_eq 65; cross_turn 195, 2dpm_uneq 286) and a break on
+    sonar_hold_cpa seed 12 (a duplicate frozen beside T2's track: the centroid of T2's
+    detection moved both, and the scorer took the duplicate); not kept.
   - Tried, not kept: the release decided by the likelihood ratio of the two pairings (the
     pair's predictions, full measurement incl. level; >= 1000) instead of the 3 sigma
     order: seeds 1-40 1 -> 12 swap runs (cross_slow 11: near the predicted crossing a

@@ -89,12 +89,13 @@ RMSE 0.39, cpa 0.97, cross_* 0.38-0.42 deg); 40 seeds: breaks 0 runs but cross_t
 (1 break), swaps 0 everywhere.
 Session 17 (2026-11-26): the single-hypothesis tracker's memory-mode pairs
 (common.sonar.bearing_pairs: a frozen pair whose order the prediction is sure of is
-released for the scan, else its centroid follows its detections). 20 seeds, GNN: swap runs
-0 on every scene (cross_eq 1 before), break runs hold_cpa 1 (seed 16, as before), else 0;
-false <= 0.08; RMSE hold5 0.40, cpa 0.96, cross_eq 0.41, cross_uneq 0.43, cross_turn 0.43,
-cross_slow 0.40 deg (0.52-0.55 before: the frozen pairs coasted). MHT unchanged (0 swap
-and break runs, RMSE 0.39-0.42 on the cross scenes). Over seeds 1-480 the GNN's swap runs
-on these four crossing scenes are 1 in 1920 (cross_turn 195; benchmarks/crossing_seeds.py).
+released for the scan, else the centroid of its two detections updates its centroid).
+20 seeds, GNN: swap runs 0 and break runs 0 on every scene (cross_eq 1 swap run before);
+false <= 0.10 per 100 cycles; RMSE hold5 0.40, cpa 0.96, cross_eq 0.41, cross_uneq 0.43,
+cross_turn 0.43, cross_slow 0.40 deg (0.52-0.55 before: the frozen pairs coasted). MHT
+unchanged (0 swap and break runs, RMSE 0.39-0.42 on the cross scenes). Over seeds 1-480
+the GNN's swap runs on these four crossing scenes are 1 in 1920 (cross_turn 328;
+benchmarks/crossing_seeds.py).
 
 Goals (exit code 1 when one fails): false confirmed tracks < 1 per 100 cycles on every
 scene; breaks 0 in >= 95 % of runs; swaps 0 in every run.

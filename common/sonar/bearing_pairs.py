@@ -26,9 +26,9 @@ target's detection 7 deg off when both left the memory mode, and the two then co
 side by side beside one target for minutes, eq. 13 testing only their predictions. A
 young track's bearing-rate error did the same on the fast crossings (sonar_cross_4dpm_*).
 Measured (benchmarks/crossing_seeds.py, GNN with 004, the ten crossing scenes, 1600 runs
-each line, runs with a swap (with a break)): seeds 1-160 29 (17) -> 1 (4), seeds 161-320
-(held out) 16 (5) -> 2 (3), seeds 321-480 (never run before) 0 (4); bearing RMSE per
-scene 0.51-0.94 -> 0.39-0.73 deg.
+each line, runs with a swap (with a break)): seeds 1-160 29 (17) -> 0 (3), seeds 161-320
+(held out) 16 (5) -> 0 (1), seeds 321-480 (never run before) 1 (3); bearing RMSE per
+scene 0.51-0.94 -> 0.39-0.74 deg.
 """
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def test_the_common_mode_update_moves_both_tracks_alike_and_keeps_their_differen
 
 # Runs that swapped before the pairs' rules, through the real tracker (seeds from
 # benchmarks/crossing_seeds.py's list of session 16; after the rules every crossing scene
-# over seeds 1-480 has at most 2 swap runs in 480).
+# over seeds 1-480 has at most 1 swap run in 480).
 HOLD_SWAPS = [("sonar_hold_cross_turn", 36), ("sonar_hold_cross_turn", 67),
               ("sonar_hold_cross_slow", 26), ("sonar_hold_cross_slow", 55),
               ("sonar_hold_cross_eq", 12)]
