@@ -297,7 +297,7 @@ class BearingTracker:
         tab, imm = self.table, self.imm is not None
         xm, Pm = (tab.xm[idx], tab.Pm[idx]) if imm else (x[:, None].copy(), P[:, None].copy())
         centroid_update(pairs, rows, zb, rb, xm, Pm)
-        if self.imm is None:
+        if not imm:
             return xm[:, 0], Pm[:, 0]
         tab.xm[idx], tab.Pm[idx] = xm, Pm
         return self.imm.combined(tab.mu[idx], xm, Pm)
