@@ -318,9 +318,18 @@ GNN, session 17 (2026-11-26; baseline the tracker of 5883586, seeds 1-160 37 swa
     order: seeds 1-40 1 -> 12 swap runs (cross_slow 11: near the predicted crossing a
     wrong-order prediction meets well-separated detections).
 MHT, seeds 321-480 (not looked at before; scorer of before 8cff97a, which can only turn a
-swap into a break): 2 swap runs, both on sonar_hold_cross_slow (361, 478; not traced),
-break runs cross_uneq 342, cross_turn 342, cross_slow 444 and 478, hold5 411 and 423;
-the six sonar_cross_* scenes 0 and 0; RMSE 0.38-0.56 deg.
+swap into a break): 2 swap runs, both on sonar_hold_cross_slow (361, 478), break runs
+cross_uneq 342, cross_turn 342, cross_slow 444 and 478, hold5 411 and 423; the six
+sonar_cross_* scenes 0 and 0; RMSE 0.38-0.56 deg. Traced, not fixed:
+  - 361, a transient: at t = 970 s (targets 6.8 deg apart, T2 missed) both tracks enter a
+    conflict over T1's one detection; #5's hypotheses split between T2 and that
+    detection, and its published moments (92.8 deg, +6.1 deg/min, then 94.4 at t = 980 s,
+    on T1) straddle both targets for two scans; the scorer gives T1 to #5, then #5 is
+    back on T2 at t = 1000 s.
+  - 478: the pair, coalesced between the targets in a conflict (t = 830-850 s), ends it
+    right (#4 on T2, #6 on T1), but at t = 865 s #4 takes T1's detection in a new
+    conflict and leaves at +10 deg/min (99 deg at t = 925 s); T2 gets a new track (a
+    break) and #4 comes back onto T1 beside #6 (t = 945 s, the swap).
 """
 
 from __future__ import annotations
