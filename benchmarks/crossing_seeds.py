@@ -302,6 +302,7 @@ GNN, session 17 (2026-11-26; baseline the tracker of 5883586, seeds 1-160 37 swa
       1-160     29 (17, 1)       0 (3, 1)
       161-320   16 (5, 1)        0 (1, 0)
       321-480   not run          1 (3, 2): cross_turn 328
+      481-640   not run          0 (4, 0)
     Bearing RMSE per scene 0.51-0.94 -> 0.39-0.74 deg (the hold scenes 0.55-0.72 ->
     0.42-0.45, the MHT's 0.38-0.43), false tracks the same (<= 0.04 per 100 cycles).
     cross_turn 328: the pair sits between the targets (90-91 deg, the targets at 94 and

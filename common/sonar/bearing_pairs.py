@@ -27,8 +27,8 @@ side by side beside one target for minutes, eq. 13 testing only their prediction
 young track's bearing-rate error did the same on the fast crossings (sonar_cross_4dpm_*).
 Measured (benchmarks/crossing_seeds.py, GNN with 004, the ten crossing scenes, 1600 runs
 each line, runs with a swap (with a break)): seeds 1-160 29 (17) -> 0 (3), seeds 161-320
-(held out) 16 (5) -> 0 (1), seeds 321-480 (never run before) 1 (3); bearing RMSE per
-scene 0.51-0.94 -> 0.39-0.74 deg.
+(held out) 16 (5) -> 0 (1), seeds 321-480 and 481-640 (never run before) 1 (3) and
+0 (4); bearing RMSE per scene 0.51-0.94 -> 0.39-0.75 deg.
 """
 
 from __future__ import annotations
