@@ -41,6 +41,13 @@ GATE = 10.83  # chi-square(1) 0.999 quantile of the centroid innovation
 SIGN_SIGMAS = 3.0  # the pair's order is known when |b_1 - b_2| >= 3 sigma
 
 
+def per_track(n: int, rows: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(n,) the value of the detection GNN gave each of n tracks (rows), NaN for none."""
+    out = np.full(n, np.nan)
+    out[rows] = values
+    return out
+
+
 def memory_pairs(brg: np.ndarray, var: np.ndarray, frozen: np.ndarray) -> np.ndarray:
     """Pairs (K, 2) of track rows: frozen tracks that are each other's nearest frozen
     neighbour in bearing (d^2 = (b_i - b_j)^2 / (var_i + var_j))."""
@@ -71,10 +78,8 @@ def release(frozen: np.ndarray, brg: np.ndarray, P00: np.ndarray, rows: np.ndarr
     known, `ordered`) and the pairs (K, 2) that stay frozen, from the frozen mask, the
     predicted bearings brg and variances P00 (N,), and the GNN pairs: track rows and
     their detections' bearings det_brg."""
-    by_track = np.full(brg.size, np.nan)
-    by_track[rows] = det_brg
     pairs = memory_pairs(brg, P00, frozen)
-    known = ordered(pairs, brg, P00, by_track)
+    known = ordered(pairs, brg, P00, per_track(brg.size, rows, det_brg))
     released = np.zeros(brg.size, dtype=bool)
     released[pairs[known].ravel()] = True
     return released, pairs[~known]
@@ -84,9 +89,8 @@ def centroid_update(pairs: np.ndarray, rows: np.ndarray, det_brg: np.ndarray, de
                     xm: np.ndarray, Pm: np.ndarray) -> None:
     """The common-mode update of the frozen pairs, in place on the model states xm, Pm (N, J,
     ...), from the GNN pairs: track rows, their detections' bearings and variances."""
-    by_track, var = np.full(xm.shape[0], np.nan), np.full(xm.shape[0], np.nan)
-    by_track[rows], var[rows] = det_brg, det_var
-    zc, rc, seen = centroid_measurements(pairs, by_track, var)
+    n = xm.shape[0]
+    zc, rc, seen = centroid_measurements(pairs, per_track(n, rows, det_brg), per_track(n, rows, det_var))
     common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
 
 
