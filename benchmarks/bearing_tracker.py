@@ -28,8 +28,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams
 from common.evaluation.metrics import gospa
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams
 
 DT, SIGMA, PD, WARM, TIMED = 10.0, math.radians(0.2), 0.9, 15, 20
 C_DEG = 2.0

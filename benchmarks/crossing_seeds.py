@@ -39,7 +39,7 @@ mid-crossing (both tracks on one bearing for minutes) and left it in the bounced
 two of them (107, 133) by the re-link of the lost target's new track by the sign of its
 young rate estimate (e.g. -1.54 deg/min on a target rising at 0.8). Since 2026-11-26
 (session 11) a coalesced pair is settled by the likelihood of both pairings against the
-two tracks' states from before the conflict (common.sonar.mht_tracks.crossing_order and
+two tracks' states from before the conflict (common.sonar.mht.tracks.crossing_order and
 the coalesced branch of relink): 1 (6) swap runs in the 1600 crossing runs (0.06 %,
 cross_slow 150: the re-linked track is pulled into a new conflict by the young track's
 wide gate at once), the same break runs, and sonar_hold5 seed 106 now a swap run (a
@@ -131,7 +131,7 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     beside one target's detections while the other target was 8-13 deg away): 38 -> 38
     (cross_turn 93 fixed, 43 new, RMSE cross_turn 0.63 -> 0.60, cross_slow 0.64 -> 0.61).
   - re-link after a memory-mode episode (2026-11-26, session 11; the coalesced branch of
-    common.sonar.mht_tracks.relink on 004's memory mode, in a module bearing_relink): a
+    common.sonar.mht.tracks.relink on 004's memory mode, in a module bearing_relink): a
     confirmed track's state is kept when its 004 flag rises, with its partner (the
     mutual-nearest flagged confirmed track in bearing); a track confirmed within 10 deg of
     a pair within d_merge of each other (coalesced) goes to the member whose entry state it
@@ -252,7 +252,7 @@ number changed target. Same trackers, seeds 1-160 / 161-320:
   MHT: 0 -> 0 / 2 -> 1 swap runs (4dpm_eq 267 gone; 4dpm_uneq 169 stays: two tracks on
        T1, the scorer's pick between them at t = 250, then the re-link), break runs the
        same seeds; false tracks <= 0.02 per 100 cycles, RMSE 0.38-0.57 deg.
-Split-off rates (2026-11-26, session 14; common.sonar.mht_hypotheses `split_off_rates`,
+Split-off rates (2026-11-26, session 14; common.sonar.mht.hypotheses `split_off_rates`,
 called by mht `_split`): 000 splits a track's second hypothesis off as it is, with the bearing rate
 of the track it leaves, which the measurement that made it does not observe (4dpm_uneq
 169: #30 split off at T2's bearing with T1's +3.4 deg/min). Reset to a new track's rates
@@ -291,7 +291,7 @@ GNN, session 17 (2026-11-26; baseline the tracker of 5883586, seeds 1-160 37 swa
     for minutes (eq. 13 tests the predictions, which stay together). Likewise 4dpm_uneq
     2 and 101: a young track's bearing rate 1.1-1.7 deg/min short of its target's, coasted
     through a 120 s memory mode.
-  - Kept: common.sonar.bearing_pairs. A pair of frozen tracks (mutual nearest) is released
+  - Kept: common.sonar.bearing.pairs. A pair of frozen tracks (mutual nearest) is released
     for the scan when the prediction is sure of its order (|b_1 - b_2| >= 3 sigma of the
     difference) and GNN gave it two detections in that order; else, given two detections,
     its centroid is updated from theirs (association-free), the difference staying on

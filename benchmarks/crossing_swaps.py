@@ -31,9 +31,9 @@ from typing import Any, Literal
 import numpy as np
 
 from common.bus.local_run import Deployment
-from common.radar.bistatic import azimuth, bistatic_range
 from common.deploy.config import load
 from common.evaluation.crossing_eval import EvalParams, Frame, Summary, score_run, summarise
+from common.radar.geometry.bistatic import azimuth, bistatic_range
 from common.sim.simulator import load_scenario
 
 REPO = Path(__file__).resolve().parents[1]

@@ -35,11 +35,11 @@ scan, switches < 1 per 100 targets, RMSE/PCRLB <= 1.5, mean NEES within a factor
 the dimension (2-4.5 for the 3-D position).
 
 Current (2026-11-26, session 16: as session 15 (trajectory GOSPA scoring and pairing; the
-number succession of common.radar.global_succession; the rebuild and the vertical floor
-of common.radar.global_reopen; the confirmation of FusionParams.confirm_cycles /
+number succession of common.radar.fusion.succession; the rebuild and the vertical floor
+of common.radar.fusion.reopen; the confirmation of FusionParams.confirm_cycles /
 confirm_bases), and since session 16 the track segment association of
-common.radar.global_segments, a published number never replaced
-(common.radar.global_succession) and the rebuild's test on every confirmed track
+common.radar.fusion.segments, a published number never replaced
+(common.radar.fusion.succession) and the rebuild's test on every confirmed track
 (FusionParams.reopen_watch); 120 s; CPU ms per scan on 2 cores shared with other runs).
 dense and dense300, seeds 1 and 2, then dense1000:
 
@@ -122,18 +122,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from origin_switches import OriginLabels
 
+from common.core.track_table import Status
 from common.deploy.config import parse, section
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, score_targets
-from common.radar.fusion_params import FusionParams
+from common.radar.fusion.params import FusionParams
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import gtracks_message, plots_of
-from common.core.track_table import Status
 from common.wire.sim_messages import truth_state
-
-from origin_switches import OriginLabels
 
 REPO = Path(__file__).resolve().parents[1]
 WARMUP = 30.0

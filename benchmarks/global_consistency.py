@@ -20,13 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from common.deploy.config import load, section
-from common.radar.fusion_params import FusionParams
-from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
-from common.wire.radar_chain import RadarChain
-from common.sim.scenario import load_scenario
+from common.evaluation.pcrlb import Evaluation, base_information, monte_carlo_nees, score_targets
+from common.radar.fusion.params import FusionParams
+from common.sim.scenario import load_scenario, radar_scene
 from common.sim.simulator import run_scenario
-from common.evaluation.pcrlb import base_information
-from common.sim.scenario import radar_scene
+from common.wire.radar_chain import RadarChain
 from common.wire.sim_messages import truth_state
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

@@ -24,14 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from common.bus.local_run import Deployment
-from common.radar.bistatic import POS, project
 from common.deploy.config import load, section
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.plot_fusion import Plots
-from common.wire.radar_messages import gtracks_message
 from common.evaluation.pcrlb import Evaluation, score_targets
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import POS, project
+from common.radar.plots.channel_fusion import Plots
+from common.wire.radar_messages import gtracks_message
 
 DENSE = Path(__file__).resolve().parents[1] / "scenarios" / "dense.toml"
 SIG = np.array([60.0, 0.7, np.radians(0.5)])
@@ -99,7 +99,8 @@ def chain_benchmark() -> None:
 
     p = section(cfg, "radar.fusion", FusionParams)
     sc = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
-                       base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), 30.0)
+                       base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z,
+                       np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]), 30.0)
     ratio = np.array([v.rmse / v.bound for v in sc.values()])
     s = ev.metrics.summary()
     print(f"  confirmed-track GOSPA mean {s.mean_gospa:.0f} m, switches {s.switches}, breaks "

@@ -43,14 +43,14 @@ plots), 0 lost, 0 missed, 0 rejected, end to end p50 / p99 33 / 335 ms; 30x: 960
 kept up, 0 lost, 130 / 542 ms; 40x: 1200 scans, 0 lost, the last scan 2.3 s after its
 plots (end to end p50 2.8 s: the ceiling is between 30x and 40x).
 dense1000 (--scene dense1000, 1000 targets, 120 scans, idle machine, after the ghost
-clean-up of common.radar.global_merge): 2x, 4x and 6x kept up (last gtracks 0.15-0.17 s
+clean-up of common.radar.fusion.merge): 2x, 4x and 6x kept up (last gtracks 0.15-0.17 s
 after its plots), 0 lost, 0 missed, 0 rejected; end to end p50 / p99 138 / 2740 ms,
 136 / 3633 ms, 986 / 3830 ms (the p99: the cycles that initialise 1000 tracks; global
 fusion handling p50 / p99 5 / 133 ms at 2x).
 dense1000 at 2x again on 2026-11-26 (session 12: number succession in global fusion;
 idle machine): kept up (last gtracks 0.12 s after its plots), 0 lost, 0 missed, 0
 rejected; end to end p50 / p99 147 / 3111 ms; global fusion handling p50 / p99 5.3 / 148 ms.
-Session 13 (the rebuild of contradicted tracks, common.radar.global_reopen; idle machine):
+Session 13 (the rebuild of contradicted tracks, common.radar.fusion.reopen; idle machine):
 kept up (0.13 s), 0 lost, 0 missed, 0 rejected; end to end p50 / p99 173 / 3286 ms; global
 fusion handling p50 / p99 7.4 / 188 ms.
 
@@ -66,10 +66,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from soak import REPO, Observer, counters_table, failures, start_chain, wait_counters
-from common.deploy.config import load as load_config
+
 from common.bus.local_run import Deployment
+from common.deploy.config import load as load_config
 
 RUN_SCANS = 120  # the dense scenes (dense, dense300, dense1000): 120 x 1 s
 STALL_S = 30.0  # after the input: wait for the last global tracks while any arrive

@@ -35,7 +35,7 @@ Scale (both modes): N = 10, 50, 200 targets of benchmarks/bearing_tracker.py (N/
 false detections per cycle): median ms per cycle and hypotheses per track (mean, max).
 
 Measured 2026-11-26 (20 runs per case, 2 cores; MHT with the bearing-rate models of
-common.sonar.mht_models, which run where q_theta_quiet < q_theta: only close_approach and
+common.sonar.mht.models, which run where q_theta_quiet < q_theta: only close_approach and
 sonar_hold5 here, the sonar_cross_* scenes set q_theta = 1e-10 and are unchanged):
   case                   mode  swaps (runs) breaks (runs) false/100 RMSE  retro  filt
   sonar_cross_1dpm_eq    gnn    0 ( 0)   0 ( 0)   0.08   0.488
@@ -59,7 +59,7 @@ sonar_hold5 here, the sonar_cross_* scenes set q_theta = 1e-10 and are unchanged
   one contact); the 3 break runs remain. relink_deg and d_split = 3.5 were set after
   looking at hold5 (so hold5 is no longer an untuned scene for MHT).
   Session 17 (2026-11-26, 20 runs per case): the GNN's memory-mode pairs
-  (common.sonar.bearing_pairs) and crossing_eval.Numbers (a number reused at once by the
+  (common.sonar.bearing.pairs) and crossing_eval.Numbers (a number reused at once by the
   GNN tracker is not the old track); both modes now pass every goal:
   case                   mode  swaps (runs) breaks (runs) false/100 RMSE  retro  filt
   sonar_cross_1dpm_eq    gnn    0 ( 0)   0 ( 0)   0.08   0.395
@@ -109,8 +109,9 @@ from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import parse, section  # noqa: E402
 from common.evaluation.crossing_eval import EvalParams, Frame, Numbers, associate, separation  # noqa: E402
 from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
-from common.sonar.bearing_tracker import BearingTracker  # noqa: E402
-from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams  # noqa: E402
+from common.sonar.bearing.tracker import BearingTracker  # noqa: E402
+from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
+from common.sonar.mht.tracker import MhtTracker  # noqa: E402
 
 DEG = math.radians(1.0)
 EVAL = EvalParams(sigma=(DEG,), gate=5.0, resolved=6.0, near=1.0, far=8.0, lost_cycles=3,

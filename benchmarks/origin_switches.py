@@ -27,10 +27,10 @@ import numpy as np
 from common.core.angles import wrap_pi
 from common.core.gating import chi2_gate
 from common.evaluation.metrics import count_switches
-from common.radar.bistatic import project
-from common.radar.elementary import ElementaryTracks
-from common.radar.global_assoc import YR
-from common.radar.global_report import GlobalTracks
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.assoc import YR
+from common.radar.fusion.report import GlobalTracks
+from common.radar.geometry.bistatic import project
 
 
 class OriginLabels:

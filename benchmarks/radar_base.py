@@ -30,16 +30,16 @@ from pathlib import Path
 
 import numpy as np
 
-from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate
-from common.deploy.config import RadarBase, load
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
 from common.core.gating import chi2_gate
+from common.core.track_table import Status
+from common.deploy.config import RadarBase, load
 from common.evaluation.metrics import gospa
-from common.radar.plot_fusion import PlotFusion, Plots
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate
+from common.radar.plots.channel_fusion import PlotFusion, Plots
 from common.sim.radar import radar_plots
 from common.sim.scenario import RadarChannelSim, RadarSim
 from common.sim.simulator import load_scenario, run_scenario
-from common.core.track_table import Status
 
 REPO = Path(__file__).resolve().parents[1]
 UNITS = np.array([150.0, 2.0, np.radians(1.5)])  # GOSPA units: default channel sigmas
@@ -156,7 +156,9 @@ def run_stonesoup(fused: list[tuple[float, Plots]], truth: list[np.ndarray],
         from stonesoup.measures import Mahalanobis
         from stonesoup.models.measurement.linear import LinearGaussian
         from stonesoup.models.transition.linear import (
-            CombinedLinearGaussianTransitionModel, ConstantAcceleration, ConstantVelocity,
+            CombinedLinearGaussianTransitionModel,
+            ConstantAcceleration,
+            ConstantVelocity,
         )
         from stonesoup.predictor.kalman import KalmanPredictor
         from stonesoup.types.detection import Detection

@@ -1,5 +1,5 @@
 """The seed's single EKF against the default mixture, side by side (issue 14): the numbers
-that keep the departures of common.radar.global_fusion justified.
+that keep the departures of common.radar.fusion.cycle justified.
 
 Run: .venv/bin/python benchmarks/seed_vs_mixture.py [--scenes two_targets crossing dense]
      [--seeds 1 2 3] [--scans N]
@@ -7,7 +7,7 @@ Run: .venv/bin/python benchmarks/seed_vs_mixture.py [--scenes two_targets crossi
 Each scene goes through the in-process chain of benchmarks/dense_scale.py (`run`: its
 cores, its scoring) twice per seed, with [radar.fusion] filter = "mixture" (altitude
 bands x IMM) and filter = "seed" (001's EKF from the blocks [36]-[41] without altitude
-prior and [44]-[46], fixed Q of [51]; everything else shared: common.radar.global_filter).
+prior and [44]-[46], fixed Q of [51]; everything else shared: common.radar.fusion.track_filter).
 Per scene and path, means over the seeds of: missed targets and false tracks per scan (%
 of the targets present, after a 30 s warm-up, GOSPA cut-off 2 km), number switches and
 breaks per 100 targets, RMSE / PCRLB (median over targets), mean position NEES (3 dof),
@@ -43,7 +43,7 @@ same seeds):
 
 Measured again 2026-11-26 (session 12; switches and breaks now on the trajectory GOSPA
 assignment minimised over the run, common.evaluation.trajectory_gospa, and the number
-succession of common.radar.global_succession in both paths; seeds as above, dense300
+succession of common.radar.fusion.succession in both paths; seeds as above, dense300
 not run):
 
   scene        filter   seeds targets   missed   false  switch  breaks RMSE/PCRLB    NEES    fusion
@@ -61,7 +61,7 @@ per-scan track listings of two_targets.toml seeds 1-4): a straight, high target 
 (RMSE 0.68 PCRLB, NEES 0.99 on seed 1); a track started from the blocks of two
 ellipsoids without prior can take a wrong altitude and keep it (seed 1: the 7 km target
 at 5-9 km too low for 60 s; the flat-bottomed likelihood near the sensors' plane:
-common.radar.global_init.altitude_bands), and at the 2 deg/s turn the fixed Q of [51]
+common.radar.fusion.initiation.altitude_bands), and at the 2 deg/s turn the fixed Q of [51]
 lets the gate [48] dissociate bases: on seeds 1-4 new tracks started on the turning
 target at altitudes 1-4 km off, and its track was lost on seeds 1 and 4 (breaks 33 per
 100 targets, false tracks 7.6 % of the targets per scan). The cost per scan is the same
@@ -74,7 +74,6 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-
 from dense_scale import Row, run
 
 PATHS = ("mixture", "seed")

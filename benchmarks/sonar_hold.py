@@ -1,6 +1,6 @@
 """Sonar tracks that hold (issue 13 section 2): false confirmed tracks, breaks, swaps and
 bearing RMSE of the bearing tracker on scenes it was not tuned on, 20 seeds each, in one
-process (simulator -> common.sonar.bearing_tracker, the code the service runs).
+process (simulator -> common.sonar.bearing.tracker, the code the service runs).
 
 Run: .venv/bin/python benchmarks/sonar_hold.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
 
@@ -18,7 +18,7 @@ max_duration = 600 s, the same on every scene, set after the first measurement):
                      false detections (written 2026-11-26 before the changes it measures).
 
 Modes: gnn, the single-hypothesis tracker with seed 004 crossing management
-(common.sonar.bearing_tracker); mht, the multiple-hypothesis mode (common.sonar.mht) with
+(common.sonar.bearing.tracker); mht, the multiple-hypothesis mode (common.sonar.mht.tracker) with
 [sonar.tracker.mht] and rho_F = the scene's false detections per rad and per 10 dB (as
 benchmarks/mht.py).
 
@@ -35,8 +35,8 @@ Bearing RMSE over the associated cycles.
 
 Measured 2026-11-26, 20 seeds per scene (false: per 100 cycles; breaks, swaps: runs with one
 (total); RMSE deg). Before: a5ff39b; after: the bearing IMM in 004 memory mode predicts with
-its quiet Q (common.sonar.bearing_imm), and the MHT mode carries the IMM's two bearing-rate
-models per hypothesis, the quiet one only in a resolution conflict (common.sonar.mht_models).
+its quiet Q (common.sonar.bearing.imm), and the MHT mode carries the IMM's two bearing-rate
+models per hypothesis, the quiet one only in a resolution conflict (common.sonar.mht.models).
   scene                  mode   before: false breaks  swaps   RMSE   after: false breaks swaps  RMSE
   sonar_hold5            gnn           0.00  0 (0)   0 (0)   0.42          0.00  0 (0)  0 (0)  0.42
   sonar_hold5            mht           0.00  3 (4)   7 (13)  0.64          0.00  3 (4)  0 (0)  0.40
@@ -57,7 +57,7 @@ Open: the GNN swap on sonar_hold_cross_eq (seed 12): at the end of the memory mo
 tracks' gates are wide (bearing sigma 1.8 deg, amplitude sigma 13 dB after 135 s of
 coasting), GNN gives the track of the detected target a clutter detection 3.5 deg off and
 the other track that target's detection, which the exit rule of
-common.sonar.bearing_crossing then drops; the track recovers with a wrong bearing rate,
+common.sonar.bearing.crossing then drops; the track recovers with a wrong bearing rate,
 re-enters the ambiguity beside the other track and coasts onto the other target. Barring
 those pairs before the GNN instead of dropping them after it fixed that run but gave
 swaps on cross_uneq (1), cross_turn (2), cross_slow (1) (after the own-ship turn both
@@ -83,12 +83,12 @@ run of missed detections (seed 9: contact 3 undetected 4 cycles in a row at the 
 crossing, no detection in the simulator's output) and replaced by a new number: the
 deletion rule counted the misses while the track was still confirmed towards n_delete,
 so SA's demotion (ZA from za_max 6 below ZA_krit 3: 4 misses) deleted it at once. The
-n_delete cycles now count from the demotion (common.sonar.mht), 6 misses in a row delete.
+n_delete cycles now count from the demotion (common.sonar.mht.tracker), 6 misses in a row delete.
 MHT, 20 seeds, after that: every scene false <= 0.07, breaks 0 runs, swaps 0 runs (hold5
 RMSE 0.39, cpa 0.97, cross_* 0.38-0.42 deg); 40 seeds: breaks 0 runs but cross_turn 1 run
 (1 break), swaps 0 everywhere.
 Session 17 (2026-11-26): the single-hypothesis tracker's memory-mode pairs
-(common.sonar.bearing_pairs: a frozen pair whose order the prediction is sure of is
+(common.sonar.bearing.pairs: a frozen pair whose order the prediction is sure of is
 released for the scan, else the centroid of its two detections updates its centroid).
 20 seeds, GNN: swap runs 0 and break runs 0 on every scene (cross_eq 1 swap run before);
 false <= 0.10 per 100 cycles; RMSE hold5 0.40, cpa 0.96, cross_eq 0.41, cross_uneq 0.43,
@@ -117,11 +117,12 @@ sys.path.insert(0, str(REPO))
 
 from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
-from common.evaluation.crossing_eval import one_to_one  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
+from common.evaluation.crossing_eval import one_to_one  # noqa: E402
 from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams  # noqa: E402
-from common.sonar.mht import MhtParams, MhtTracker  # noqa: E402
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams  # noqa: E402
+from common.sonar.mht.params import MhtParams  # noqa: E402
+from common.sonar.mht.tracker import MhtTracker  # noqa: E402
 
 CASES = ("sonar_hold5", "sonar_hold_cpa", "sonar_hold_cross_eq", "sonar_hold_cross_uneq",
          "sonar_hold_cross_turn", "sonar_hold_cross_slow")

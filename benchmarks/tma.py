@@ -12,11 +12,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from common.sonar.ctma import TmaTracker, solve_ctma
-from common.sonar.ctma_bounds import Bounds
 from core import median_ms  # benchmarks/core.py, beside this script
-from common.sonar.tma import solve_tma
+
+from common.sonar.tma.bearings_only import solve_tma
+from common.sonar.tma.bounds import Bounds
+from common.sonar.tma.constrained import TmaTracker, solve_ctma
 
 KN = 1852.0 / 3600.0
 SIG = np.radians(1.5)

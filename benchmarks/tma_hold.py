@@ -2,8 +2,8 @@
 final position error RMS against the Cramer-Rao bound, and the NEES of the published
 covariance, with the bearings TMA is fed: the raw associated detections (what the bearing
 tracker associated, true covariance sigma^2 I, what services/tma is served) or the
-tracker's filtered bearings (x[0], sqrt(P[0,0]) of common.sonar.bearing_tracker); and the
-register of the multiple-hypothesis mode (common.sonar.mht): the detections of the main
+tracker's filtered bearings (x[0], sqrt(P[0,0]) of common.sonar.bearing.tracker); and the
+register of the multiple-hypothesis mode (common.sonar.mht.tracker): the detections of the main
 hypothesis by the retrodicted weights ("mht raw", what its history queryable serves to
 TMA) or the retrodicted bearings ("mht smoothed", served beside them).
 
@@ -14,7 +14,7 @@ Geometries:
           60 s, 30 samples, own ship turning 60 deg at sample 15;
   5 turns own ship 6 kn zig-zagging 045/135 with five turns over 30 min, target 6.3 km
           away at 4 kn, 1 deg noise, one bearing every 10 s (180 samples).
-Estimator: the service's per-track core (common.sonar.ctma.TmaTracker: TMA of 002, CTMA
+Estimator: the service's per-track core (common.sonar.tma.constrained.TmaTracker: TMA of 002, CTMA
 of 003 with the minimal bounds), one cycle on all bearings.
 Goals (exit code 1 when one fails), raw detections: RMS <= 1.3 x CRLB, no run above
 5 x CRLB on both; mean NEES (4 dof: x, y, vx, vy at the last time) inside its 95 %
@@ -53,11 +53,12 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from common.evaluation.pcrlb import mean_nees_interval  # noqa: E402
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams  # noqa: E402
-from common.sonar.crlb import position_rms_bound  # noqa: E402
-from common.sonar.ctma import TmaTracker  # noqa: E402
-from common.sonar.ctma_bounds import MINIMAL_BOUNDS  # noqa: E402
-from common.sonar.mht import MhtParams, MhtTracker  # noqa: E402
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams  # noqa: E402
+from common.sonar.mht.params import MhtParams  # noqa: E402
+from common.sonar.mht.tracker import MhtTracker  # noqa: E402
+from common.sonar.tma.bounds import MINIMAL_BOUNDS  # noqa: E402
+from common.sonar.tma.constrained import TmaTracker  # noqa: E402
+from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
 
 KN = 1852.0 / 3600.0
 
@@ -103,7 +104,7 @@ def filtered(t: np.ndarray, z: np.ndarray, sig: float) -> tuple[np.ndarray, np.n
 def mht_register(t: np.ndarray, z: np.ndarray, sig: float, own: np.ndarray
                  ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """The multiple-hypothesis tracker's register of the one contact (000 retrodiction,
-    common.sonar.retrodiction), both feeds: (times, bearings, sigmas, own positions) of
+    common.sonar.mht.retrodiction), both feeds: (times, bearings, sigmas, own positions) of
     the main hypothesis's detections ("mht raw") and of the retrodicted bearings ("mht
     smoothed")."""
     tr = MhtTracker(TrackerParams(mode="broadband"), MhtParams(), "cylindrical", sig)

@@ -7,7 +7,7 @@ Run: .venv/bin/python benchmarks/tma_legs.py [--runs 5] [--speed 200]
 
 Per run: the manoeuvre times of the final solution (true 1800 s), and its position
 error at its time against the Cramer-Rao bound of the true two-leg geometry (all
-cycles, sigma0; common.sonar.crlb with the true manoeuvre time).
+cycles, sigma0; common.sonar.tma.crlb with the true manoeuvre time).
 Goals (exit code 1 when one fails): every run ends with a solution whose first leg
 time is within 240 s of the true one (12 cycles), final error RMS over the runs <= 3 x
 the bound's RMS, no run above 8 x its bound. These guard what the code does (set after
@@ -22,7 +22,7 @@ Measured 2026-11-23 (10 runs, speed 200, 2 shared cores):
   / CRLB       1.69  0.39  0.67  2.04  0.56  1.43  3.40  2.28  0.30  5.45
   RMS 2012 m against a CRLB RMS of 843 m (2.39); the in-process study with the leg time
   known (tests/sonar/test_ctma_legs.py) is at 1.06 x CRLB, so the loss is the detector's
-  (its deviation from 002 is stated in common.sonar.tma.detect_manoeuvre).
+  (its deviation from 002 is stated in common.sonar.tma.bearings_only.detect_manoeuvre).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ sys.path.insert(0, str(REPO))
 
 from common.bus.local_run import Deployment  # noqa: E402
 from common.deploy.config import load  # noqa: E402
-from common.sonar.crlb import position_rms_bound  # noqa: E402
+from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
 
 SCENE = REPO / "scenarios" / "sonar_tma_legs.toml"
 T_MANOEUVRE = 1800.0

@@ -1,4 +1,4 @@
-"""Benchmark of the TMA service glue (common.sonar.tma_manager) with the 002/003 cores: 50
+"""Benchmark of the TMA service glue (common.sonar.tma.manager) with the 002/003 cores: 50
 confirmed tracks, one btracks message per 20 s for one hour of message time.
 
 Run: .venv/bin/python benchmarks/tma_service.py
@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from common.sonar.ctma_bounds import MINIMAL_BOUNDS, Bounds
-from common.sonar.tma_manager import TmaManager, TmaParams
+from common.sonar.tma.bounds import MINIMAL_BOUNDS, Bounds
+from common.sonar.tma.manager import TmaManager, TmaParams
 
 N_TRACKS = 50
 PERIOD = 20.0

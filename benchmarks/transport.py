@@ -24,9 +24,9 @@ import time
 
 import zenoh
 
+from common.bus.procs import start_router
 from common.bus.transport import Inbox, LossCount, Publisher, open_session
 from common.deploy.config import ZenohConfig
-from common.bus.procs import start_router
 
 KEY = "bench/transport/data"
 

@@ -17,7 +17,7 @@ import re
 import signal
 import sys
 
-from common.deploy.config import ConfigError, Config, load
+from common.deploy.config import Config, ConfigError, load
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "router": ("services.router.main", "run a Zenoh router (Python, no zenohd needed)"),
@@ -33,7 +33,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "status": ("services.status.main", "list live services and their counters"),
     "record": ("services.record.main", "record messages of key expressions to a .pfrec file"),
     "replay": ("services.replay.main", "republish a .pfrec recording in order"),
-    "global-fusion": ("services.global_fusion.main", "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
+    "global-fusion": ("services.global_fusion.main",
+                      "global Cartesian tracks from all bases' elementary tracks (001 step 24)"),
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
     "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
     "view": ("services.view.main", "live operator view in a browser: tracks, sonar, services"),

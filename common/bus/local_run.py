@@ -11,11 +11,11 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from common.wire import protocol
+from common.bus.procs import Child, start_router
 from common.bus.transport import Inbox, LossCount, open_session
 from common.deploy.config import ZenohConfig, load
 from common.deploy.deployment import plan
-from common.bus.procs import Child, start_router
+from common.wire import protocol
 from common.wire.protocol import kind_of
 
 ROOT = "pf/v1"

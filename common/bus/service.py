@@ -22,11 +22,10 @@ from typing import Any
 import numpy as np
 import zenoh
 
-from common.wire import protocol
-from common.bus.transport import (LOG_EVERY, Inbox, LossCount, Publisher, SignalBytes, linger,
-                                  open_session)
+from common.bus.transport import LOG_EVERY, Inbox, LossCount, Publisher, SignalBytes, linger, open_session
 from common.core.rejection import Rejected
 from common.deploy.config import Config
+from common.wire import protocol
 
 Handler = Callable[[str, bytes], None]
 QueryHandler = Callable[[zenoh.Query], None]

@@ -21,8 +21,8 @@ from typing import Any
 import msgpack
 import zenoh
 
-from common.deploy.config import ConfigError, ZenohConfig
 from common.core.sequence import SequenceCheck
+from common.deploy.config import ConfigError, ZenohConfig
 
 LOG_EVERY = 1000
 CLOSE_LINGER_S = 0.5

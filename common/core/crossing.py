@@ -66,7 +66,6 @@ from scipy.spatial import cKDTree
 
 from common.core.angles import wrap_pi
 
-
 DENSITY_CUTOFF = 1e-12  # g terms below this fraction of their peak g_j(0) are dropped
 CUTOFF_RADIUS = float(np.sqrt(-2.0 * np.log(DENSITY_CUTOFF)))  # Mahalanobis 7.43
 

@@ -39,6 +39,15 @@ class TrackTable:
     and a slot's id column is -1 while the slot is free. Capacity doubles when full.
     """
 
+    id: np.ndarray
+    status: np.ndarray
+    score: np.ndarray
+    n_updates: np.ndarray
+    n_coast: np.ndarray
+    t_last: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+
     def __init__(
         self,
         state_dim: int,

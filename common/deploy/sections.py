@@ -9,15 +9,15 @@ import re
 import typing
 from typing import Any
 
-from common.sonar.mht import MhtParams, SonarTrackerParams
+from common.core.crossing import CrossingParams
 from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
 from common.deploy.ranges import ranges_of
-from common.core.crossing import CrossingParams
-from common.sonar.ctma import CtmaParams
-from common.radar.elementary import ElementaryParams, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.plot_fusion import PlotterParams
-from common.sonar.tma_manager import BoundsParams, SupportParams, TmaParams
+from common.radar.elementary.tracker import ElementaryParams, RadarCrossingParams
+from common.radar.fusion.params import FusionParams
+from common.radar.plots.channel_fusion import PlotterParams
+from common.sonar.mht.params import MhtParams, SonarTrackerParams
+from common.sonar.tma.constrained import CtmaParams
+from common.sonar.tma.manager import BoundsParams, SupportParams, TmaParams
 
 SECTIONS: dict[str, type] = {
     "radar.plotter": PlotterParams,

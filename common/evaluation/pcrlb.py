@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 from scipy.special import gammaincinv
 
-from common.radar.bistatic import POS, project_jacobian
-from common.evaluation.metrics import MetricsAccumulator
 from common.core.motion import cv_F, cv_Q
+from common.evaluation.metrics import MetricsAccumulator
+from common.radar.geometry.bistatic import POS, project_jacobian
 
 PairRow = tuple[float, int, float, float, float]  # t, truth id, NEES pos, NEES state, error^2
 Series = list[dict[int, int | None]]  # truth -> track per step (metrics.joint_associations)

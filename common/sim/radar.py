@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from common.core.angles import TWO_PI, wrap_2pi
-from common.radar.bistatic import azimuth, bistatic_range_rate
 from common.deploy.config import RadarBase
+from common.radar.geometry.bistatic import azimuth, bistatic_range_rate
 from common.sim.scenario import RadarChannelSim, RadarSim
 
 COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz", "snr")

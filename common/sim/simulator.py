@@ -23,8 +23,8 @@ import numpy as np
 
 from common.core.angles import wrap_2pi
 from common.deploy.config import Config, ConfigError, RadarBase, SonarArray
-from common.sim.radar import radar_plots
 from common.sim.mover import Mover
+from common.sim.radar import radar_plots
 from common.sim.scenario import Scenario, load_scenario
 from common.sim.sonar import sonar_detections
 

@@ -13,13 +13,14 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from common.deploy.config import Config, section
 from common.core.crossing import CrossingParams
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.plot_fusion import PlotFusion, PlotterParams
+from common.deploy.config import Config, section
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.params import FusionParams
+from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
 from common.wire.radar_messages import gtracks_message, plots_of
+
 
 def global_fusion(cfg: Config) -> GlobalFusion:
     """The global fusion core of a deployment: [radar.fusion], [radar.fusion_crossing]

@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from common.core.track_table import STATUS_NAME, Status
-from common.radar.elementary import ElementaryTracks
-from common.radar.global_report import GlobalTracks
-from common.radar.plot_fusion import Plots
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.report import GlobalTracks
+from common.radar.plots.channel_fusion import Plots
 from common.wire import protocol
 
 STATUS_CODE = {name: int(code) for code, name in STATUS_NAME.items()}
@@ -37,9 +37,10 @@ def fused_message(base: str, t: float, fused: Plots) -> dict[str, Any]:
 def plots_of(msg: dict[str, Any]) -> Plots:
     """Plots of a `plots` or `fused` message, decoded or as built (n_ch only in the
     latter)."""
-    cols = [np.asarray(msg[k], dtype=float) for k in ("rb", "vb", "az", "srb", "svb", "saz")]
-    return (Plots(*cols, np.asarray(msg["n_ch"], dtype=np.int64)) if "n_ch" in msg
-            else Plots(*cols))
+    rb, vb, az, srb, svb, saz = (np.asarray(msg[k], dtype=float) for k in ("rb", "vb", "az", "srb", "svb", "saz"))
+    if "n_ch" in msg:
+        return Plots(rb, vb, az, srb, svb, saz, np.asarray(msg["n_ch"], dtype=np.int64))
+    return Plots(rb, vb, az, srb, svb, saz)
 
 
 def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
@@ -81,7 +82,9 @@ def _fast_etracks(obj: Any) -> tuple[str, ElementaryTracks] | None:
     protocol.ETRACKS allows (the caller then lets protocol.decode name it)."""
     if type(obj) is not dict or type(obj.get("v")) is not int or obj["v"] != protocol.VERSION:
         return None
-    t, base, tracks = obj.get("t"), obj.get("base"), obj.get("tracks")
+    t: Any = obj.get("t")
+    base: Any = obj.get("base")
+    tracks: Any = obj.get("tracks")
     if (type(t) not in (int, float) or not np.isfinite(t) or t < 0 or type(base) is not str
             or not base or type(tracks) is not list):
         return None

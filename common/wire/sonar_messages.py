@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from common.sonar.bearing_tracker import Cycle
+from common.sonar.bearing.tracker import Cycle
 from common.wire import protocol
 
 

@@ -220,7 +220,7 @@ class ViewModel:
 
     def _on_tma(self, msg: dict[str, Any]) -> None:
         a, sols = self._array(msg["array"]), msg["solutions"]
-        ell = ellipses(np.array([np.asarray(s["P"]).reshape(4, 4)[:2, :2] for s in sols])) \
+        ell: Any = ellipses(np.array([np.asarray(s["P"]).reshape(4, 4)[:2, :2] for s in sols])) \
             if sols else []
         self._topic(f"tma/{msg['array']}").set({
             "t": float(msg["t"]), "own": list(a.own),

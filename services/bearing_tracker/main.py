@@ -15,15 +15,16 @@ from dataclasses import replace
 
 import zenoh
 
+from common.bus.service import Service
+from common.cli import add_common, load_config
+from common.core.crossing import CrossingParams
+from common.core.rejection import Rejected
+from common.deploy.config import section
+from common.sonar.bearing.tracker import BearingTracker
+from common.sonar.mht.params import MhtParams, SonarTrackerParams
+from common.sonar.mht.tracker import MhtTracker
 from common.wire import protocol
 from common.wire.sonar_messages import btracks_message
-from common.sonar.bearing_tracker import BearingTracker
-from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams
-from common.cli import add_common, load_config
-from common.deploy.config import section
-from common.core.crossing import CrossingParams
-from common.bus.service import Service
-from common.core.rejection import Rejected
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,7 +1,7 @@
 """``pfusion channel-plotter``: channel plots of one base -> fused plots (001 modules 31-34).
 
 Subscribes radar/plots/<base>/*, publishes radar/fused/<base> once per scan (also when
-empty). The algorithm is common.radar.plot_fusion; this module only decodes, validates and
+empty). The algorithm is common.radar.plots.channel_fusion; this module only decodes, validates and
 publishes.
 """
 
@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import argparse
 
-from common.wire import protocol
-from common.cli import add_base_service, load_config
-from common.deploy.config import section
-from common.radar.plot_fusion import PlotFusion, PlotterParams
-from common.wire.radar_messages import fused_message, plots_of
 from common.bus.service import Service
+from common.cli import add_base_service, load_config
 from common.core.rejection import Rejected
-
+from common.deploy.config import section
+from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
+from common.wire import protocol
+from common.wire.radar_messages import fused_message, plots_of
 
 add_arguments = add_base_service  # --config, --connect, --base
 

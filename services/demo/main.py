@@ -17,15 +17,15 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from common.wire import protocol
+from common.bus.procs import Child, start_router
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, add_common
 from common.deploy.config import ZenohConfig, load
 from common.deploy.deployment import ChildSpec, plan
-from common.bus.procs import Child, start_router
 from common.sim.simulator import load_scenario
-from services.demo.report import Collected, radar_table, sonar_table
+from common.wire import protocol
 from common.wire.protocol import kind_of
+from services.demo.report import Collected, radar_table, sonar_table
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BAR = 30

@@ -13,8 +13,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
 
-from common.radar.bistatic import ellipse_points  # noqa: E402
 from common.deploy.config import Config  # noqa: E402
+from common.radar.geometry.bistatic import ellipse_points  # noqa: E402
 
 Msg = dict[str, Any]
 SIZE_IN = (12.0, 8.0)

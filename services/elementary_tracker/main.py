@@ -2,7 +2,7 @@
 modules 41-44, crossing management of 004).
 
 Subscribes radar/fused/<base>, publishes radar/etracks/<base> once per scan with every
-live track. The algorithm is common.radar.elementary; this module only decodes, validates and
+live track. The algorithm is common.radar.elementary.tracker; this module only decodes, validates and
 publishes.
 """
 
@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import argparse
 
-from common.wire import protocol
-from common.cli import add_base_service, load_config
-from common.deploy.config import section
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.wire.radar_messages import etracks_message, plots_of
 from common.bus.service import Service
+from common.cli import add_base_service, load_config
 from common.core.rejection import Rejected
-
+from common.deploy.config import section
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.wire import protocol
+from common.wire.radar_messages import etracks_message, plots_of
 
 add_arguments = add_base_service  # --config, --connect, --base
 

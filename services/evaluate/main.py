@@ -19,14 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from common.wire import protocol
+from common.bus.service import Service
 from common.cli import add_common, load_config
 from common.deploy.config import Config, section
-from common.radar.fusion_params import FusionParams
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
-from common.bus.service import Service
+from common.radar.fusion.params import FusionParams
 from common.sim.scenario import radar_scene
+from common.wire import protocol
 from common.wire.sim_messages import truth_state
 
 

@@ -2,8 +2,9 @@
 (001 step 24, modules 61-65; crossing management of 004).
 
 Subscribes radar/etracks/*, publishes radar/gtracks once per fusion cycle with every
-live global track. The algorithm is common.radar.global_fusion; this module only decodes
-and validates (into typed arrays, common.wire.radar_messages.etracks_of) and publishes. Parameters: [radar.fusion] (FusionParams) and, optionally,
+live global track. The algorithm is common.radar.fusion.cycle; this module only decodes
+and validates (into typed arrays, common.wire.radar_messages.etracks_of) and publishes.
+Parameters: [radar.fusion] (FusionParams) and, optionally,
 [radar.fusion_crossing] (CrossingParams); without that table the global tracks use the
 sup-norm ambiguity test of 004 (dimension-free; eq. 13 needs the surveillance volume
 in m^3 as `volume`). [radar.tracker] (ElementaryParams) gives the elementary trackers'
@@ -11,7 +12,7 @@ F [19] / Q [20] noise, needed to recover their equivalent measurements.
 
 Cycle rule: a base that has sent nothing usable for `max_wait` seconds of wall time
 (since its last accepted message, or since the first message of any base) is stale; the
-core then runs cycles without it (common.radar.global_fusion says why wall time and not
+core then runs cycles without it (common.radar.fusion.cycle says why wall time and not
 message time). Rejected, counted and logged (docs/faults.md): a message whose cycle
 already ran (time_backwards: late, out of order, or a base whose clock jumped back; its
 base goes stale if nothing else comes), a second message of one base and time
@@ -31,13 +32,13 @@ from __future__ import annotations
 import argparse
 import time
 
+from common.bus.service import Service
 from common.cli import add_common, load_config
+from common.core.rejection import Rejected
 from common.deploy.config import ConfigError, section
-from common.radar.fusion_params import FusionParams
+from common.radar.fusion.params import FusionParams
 from common.wire.radar_chain import global_fusion
 from common.wire.radar_messages import etracks_of, gtracks_message
-from common.bus.service import Service
-from common.core.rejection import Rejected
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import zenoh
 
-from common.wire import protocol
-from common.cli import add_common, load_config
-from common.bus.transport import LossCount, attachment_of, open_session, stop_on_signals
 from common.bus.recording import RecordWriter
+from common.bus.transport import LossCount, attachment_of, open_session, stop_on_signals
+from common.cli import add_common, load_config
+from common.wire import protocol
 
 log = logging.getLogger("record")
 

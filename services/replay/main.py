@@ -11,9 +11,9 @@ from pathlib import Path
 
 import zenoh
 
+from common.bus.recording import RecordingError, RecordReader
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
-from common.bus.recording import RecordReader, RecordingError
 
 log = logging.getLogger("replay")
 

@@ -24,15 +24,20 @@ import time
 from collections.abc import Iterable
 from typing import IO
 
+from common.bus.launcher import Forked
+from common.bus.liveliness import Drain
+from common.bus.procs import child_env
 from common.bus.transport import open_session, stop_on_signals
 from common.cli import COMMANDS, add_common, load_config
 from common.deploy.config import ZenohConfig
 from common.deploy.deployment import (
-    Backoff, ChildSpec, loopback_port, plan, router_endpoint, simulator_spec,
+    Backoff,
+    ChildSpec,
+    loopback_port,
+    plan,
+    router_endpoint,
+    simulator_spec,
 )
-from common.bus.launcher import Forked
-from common.bus.liveliness import Drain
-from common.bus.procs import child_env
 
 STOP_TIMEOUT_S = 5.0
 POLL_S = 0.1

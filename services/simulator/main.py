@@ -18,10 +18,10 @@ from pathlib import Path
 
 import zenoh
 
-from common.wire import protocol
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.sim.simulator import load_scenario, repeated
+from common.wire import protocol
 
 log = logging.getLogger("simulate")
 

@@ -4,7 +4,8 @@ track of one array (TMA of seed 002, constrained TMA with error handling of seed
 Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (confirmed tracks)
 root/sonar/tma/bounds/A (bounds at run time) and root/sonar/tma/support/A (002 support
 values at run time); fetches root/sonar/history/A/<id> for
-a newly confirmed track and whenever its TMA cycle is due (the associated detections); publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
+a newly confirmed track and whenever its TMA cycle is due (the associated detections);
+publishes root/sonar/tma/A per btracks cycle (docs/protocol.md).
 
 Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaParams), [sonar.tma.support]
 (SupportParams), [sonar.tma.bounds]
@@ -17,14 +18,14 @@ import argparse
 from dataclasses import replace
 from typing import Any
 
-from common.wire import protocol
-from common.cli import add_common, load_config
-from common.deploy.config import Config, ConfigError, section
-from common.sonar.ctma import CtmaParams
-from common.sonar.ctma_bounds import Bounds
 from common.bus.service import Service
+from common.cli import add_common, load_config
 from common.core.rejection import Rejected
-from common.sonar.tma_manager import BOUNDS_FIELDS, BoundsParams, SupportParams, TmaManager, TmaParams, make_bounds
+from common.deploy.config import Config, ConfigError, section
+from common.sonar.tma.bounds import Bounds
+from common.sonar.tma.constrained import CtmaParams
+from common.sonar.tma.manager import BOUNDS_FIELDS, BoundsParams, SupportParams, TmaManager, TmaParams, make_bounds
+from common.wire import protocol
 
 HISTORY_TIMEOUT_S = 2.0
 SUBTABLES = ("ctma", "bounds", "support")

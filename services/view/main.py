@@ -22,11 +22,11 @@ from typing import Any
 import zenoh
 from aiohttp import web
 
+from common.bus.liveliness import alive, take
 from common.bus.transport import Envelope, Inbox, open_session
 from common.cli import add_common, load_config
 from common.wire import protocol
 from common.wire.view_model import ViewModel
-from common.bus.liveliness import alive, take
 from services.view.server import Hub, app
 
 ALIVE_PERIOD_S = 1.0

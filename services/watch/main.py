@@ -6,9 +6,10 @@ import argparse
 import sys
 from typing import Any
 
-from common.wire import protocol
 from common.bus.transport import Inbox, open_session, stop_on_signals
 from common.cli import add_common, load_config
+from common.wire import protocol
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p, config_required=False)

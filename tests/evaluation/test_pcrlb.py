@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from common.core import kalman
-from common.radar.bistatic import POS, project_jacobian
 from common.core.motion import cv_F, cv_Q
 from common.evaluation.pcrlb import (
     Evaluation,
@@ -17,6 +16,7 @@ from common.evaluation.pcrlb import (
     pcrlb,
     score_targets,
 )
+from common.radar.geometry.bistatic import POS, project_jacobian
 
 RX = np.zeros((3, 3))
 TX = np.array([[-35000.0, 20000.0, 0.0], [45000.0, 10000.0, 0.0], [5000.0, -52000.0, 0.0]])

@@ -18,8 +18,8 @@ import msgpack
 import numpy as np
 
 from common.core.angles import wrap_pi
-from common.wire import protocol
 from common.deploy.config import load
+from common.wire import protocol
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 CONFIRM_CYCLES = 8

@@ -19,8 +19,7 @@ import pytest
 
 from benchmarks.crossing_swaps import CASES, SCENARIOS, Case, run_case
 from common.deploy.config import load
-from common.sim.simulator import load_scenario, run_scenario
-from common.sim.simulator import repeated
+from common.sim.simulator import load_scenario, repeated, run_scenario
 
 RUNS = 50
 

@@ -20,7 +20,7 @@ for a base (`max_wait`) instead of 3 s, so a base lagging behind on a loaded mac
 false 2.0 % and 9 switches).
 Measured (2 shared cores, load ~10): missed 0.54 %, false 0.76 %, 1 switch, 3 breaks,
 RMSE/PCRLB 0.95, NEES 3.83; 102 s. 2026-11-26 (idle, after the module 61 clean-up of
-common.radar.global_merge.explained): missed 0.55 %, false 0.77 %, 2 switches (3 at the
+common.radar.fusion.merge.explained): missed 0.55 %, false 0.77 %, 2 switches (3 at the
 commit before it), 9 breaks (9 before), RMSE/PCRLB 0.92, NEES 3.77; 10 s.
 """
 
@@ -34,7 +34,7 @@ import pytest
 from common.deploy.config import load, section
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
-from common.radar.fusion_params import FusionParams
+from common.radar.fusion.params import FusionParams
 from common.sim.scenario import radar_scene
 from common.wire.sim_messages import truth_state
 from tests.harness import SCENARIOS, Deployment, patient_scene

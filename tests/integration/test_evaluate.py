@@ -10,12 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from common.deploy.config import load, section
-from common.radar.fusion_params import FusionParams
-from common.evaluation.metrics import count_switches
-from common.evaluation.pcrlb import Evaluation, score_targets
 from common.bus.procs import Child
-from common.evaluation.pcrlb import base_information
+from common.deploy.config import load, section
+from common.evaluation.metrics import count_switches
+from common.evaluation.pcrlb import Evaluation, base_information, score_targets
+from common.radar.fusion.params import FusionParams
 from common.sim.scenario import radar_scene
 from tests.harness import SCENARIOS, Deployment
 
@@ -69,7 +68,8 @@ def test_evaluate_table_matches_direct_computation(tmp_path: Path) -> None:
 
     p = section(cfg, "radar.fusion", FusionParams)
     scores = score_targets(ev, np.array([b.tx for b in cfg.bases]), np.array([b.rx for b in cfg.bases]),
-                           base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z, np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]),
+                           base_information(radar_scene(cfg), cfg.bases), p.q, p.q_z,
+                           np.diag([1e6, 1e4, 1e6, 1e4, 1e6, 1e2]),
                            SETTLE)
     rows = {int(r[1]): r for r in (ROW.match(line) for line in text.splitlines()) if r}
     assert set(rows) == set(scores) == {1, 2}

@@ -20,14 +20,14 @@ import pytest
 
 from common.bus.transport import Publisher, free_port, open_session
 from common.deploy.config import ZenohConfig, load
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.params import FusionParams
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
 from common.wire.radar_messages import etracks_from
 from tests.harness import ROOT, SCENARIOS, Deployment
-from tests.radar.test_global_ekf import BASES, TX, RX, _Synth
 from tests.integration.test_run import TWO_TARGETS, Collector, Run
+from tests.radar.test_global_ekf import BASES, RX, TX, _Synth
 
 SCAN_S = 1.0  # scan period of two_targets.toml
 REMAINING = {"b2", "b3"}

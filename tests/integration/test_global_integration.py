@@ -26,15 +26,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from common.radar.bistatic import POS
 from common.deploy.config import load, section
-from common.radar.fusion_params import FusionParams
-from common.wire.radar_chain import RadarChain
-from common.sim.scenario import load_scenario
+from common.evaluation.pcrlb import Evaluation, base_information, monte_carlo_nees, score_targets
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import POS
+from common.sim.scenario import load_scenario, radar_scene
 from common.sim.simulator import run_scenario
-from common.evaluation.pcrlb import Evaluation, monte_carlo_nees, score_targets
-from common.evaluation.pcrlb import base_information
-from common.sim.scenario import radar_scene
+from common.wire.radar_chain import RadarChain
 from tests.harness import Deployment, patient_scene
 
 SETTLE = 30.0  # s after a target's first global track before RMSE / NEES count
@@ -73,7 +71,7 @@ def split_runs(msgs: list[dict], period: float) -> list[list[dict]]:
 def first_seen_by_two(etracks: dict[str, list[dict]], truth: list[dict], cfg) -> dict[int, float]:
     """Per truth id, the first time at which two bases hold a confirmed elementary track
     within 1 km of its bistatic range (the time the global chain can start it)."""
-    from common.radar.bistatic import bistatic_range
+    from common.radar.geometry.bistatic import bistatic_range
 
     seen: dict[int, dict[str, float]] = {}
     by_t = {m["t"]: m for m in truth}

@@ -41,14 +41,14 @@ import numpy as np
 import pytest
 
 from common.bus.procs import pfusion_argv
+from common.bus.transport import Publisher
 from common.cli import COMMANDS
 from common.deploy.config import load
 from common.deploy.deployment import ChildSpec, plan
 from common.deploy.sections import check_all
-from common.radar.bistatic import POS
+from common.radar.geometry.bistatic import POS
 from common.sim.simulator import load_scenario, run_scenario
 from common.wire import protocol
-from common.bus.transport import Publisher
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import etracks_message, plots_of
 from tests.harness import REPO, SCENARIOS, Deployment

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from common.wire import protocol
-from common.core.angles import wrap_pi
-from common.radar.bistatic import azimuth, bistatic_range
 from common.bus.transport import stamp
+from common.core.angles import wrap_pi
 from common.deploy.config import load
+from common.radar.geometry.bistatic import azimuth, bistatic_range
+from common.wire import protocol
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 SCN = SCENARIOS / "two_targets.toml"

@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 import zenoh
 
-from common.wire import protocol
+from common.bus.recording import Record, RecordingError, RecordReader, RecordWriter
 from common.bus.transport import stamp
 from common.cli import COMMANDS
 from common.deploy.config import load
 from common.deploy.deployment import ChildSpec, plan
-from common.bus.recording import Record, RecordReader, RecordWriter, RecordingError
+from common.wire import protocol
 from services.record.main import Writer
 from tests.harness import ROOT, SCENARIOS, Deployment
 

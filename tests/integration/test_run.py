@@ -12,12 +12,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from common.wire import protocol
+from common.bus.procs import pfusion_argv
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS
 from common.deploy.config import ConfigError, ZenohConfig, load, parse
 from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
-from common.bus.procs import pfusion_argv
+from common.wire import protocol
 from common.wire.protocol import kind_of
 from tests.harness import Terminal
 

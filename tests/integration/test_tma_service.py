@@ -1,4 +1,4 @@
-"""TMA service (002, 003): (a) the pure glue common.sonar.tma_manager, (b) the bounds message
+"""TMA service (002, 003): (a) the pure glue common.sonar.tma.manager, (b) the bounds message
 and the [sonar.tma] configuration, (c) simulator -> router -> bearing tracker -> tma as
 real processes on scenarios/sonar_tma.toml.
 
@@ -22,14 +22,14 @@ import numpy as np
 import pytest
 
 from common.core.angles import wrap_pi
-from common.wire import protocol
-from common.deploy.config import ConfigError, load, parse
-from common.sonar.crlb import position_rms_bound
-from common.sonar.ctma_bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.core.rejection import Rejected
-from common.sonar.tma_manager import SupportParams, TmaManager, TmaParams, make_bounds, thin
-from tests.harness import ROOT, SCENARIOS, Deployment
+from common.deploy.config import ConfigError, load, parse
+from common.sonar.tma.bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
+from common.sonar.tma.crlb import position_rms_bound
+from common.sonar.tma.manager import SupportParams, TmaManager, TmaParams, make_bounds, thin
+from common.wire import protocol
 from services.tma.main import tma_config
+from tests.harness import ROOT, SCENARIOS, Deployment
 
 SIG = 0.01
 TARGET = np.array([6000.0, 4000.0, -2.0, 1.5])

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from common.deploy.config import load
 from common.bus.procs import start_router
+from common.deploy.config import load
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 SCANS = 1000

@@ -31,7 +31,6 @@ from common.bus.transport import free_port, wait_port
 from common.wire import protocol
 from tests.harness import REPO, ROOT, SCENARIOS, Deployment
 
-
 TWO_TARGETS = SCENARIOS / "two_targets.toml"
 OUT = REPO / "out"
 CONFIRMED_RGB = (0x66, 0xBB, 0x6A)  # view.js COLOURS.confirmed
@@ -110,7 +109,6 @@ def canvas_xy(driver: Any, x: float, y: float) -> tuple[float, float]:
 def shot(driver: Any, name: str) -> np.ndarray:
     """Save the page to out/<name>.png; return the plan canvas' own pixels (H, W, 3)."""
     from matplotlib.image import imread
-
     from selenium.webdriver.common.by import By
 
     OUT.mkdir(exist_ok=True)
@@ -261,7 +259,8 @@ def test_view_in_a_browser(browser: Any, tmp_path: Path) -> None:
             f"const r = document.querySelector(\"{row}\"); "
             f"return r && getComputedStyle(r).backgroundColor === '{DEAD_RGB}'"), 60)
         alive = browser.execute_script(
-            "return [...document.querySelectorAll('#service-rows tr.alive')].map(r => r.dataset.service + '/' + r.dataset.instance)")
+            "return [...document.querySelectorAll('#service-rows tr.alive')]"
+            ".map(r => r.dataset.service + '/' + r.dataset.instance)")
         assert {"channel_plotter/b3", "global_fusion/main"} <= set(alive)
         shot(browser, "view-dead")
 

@@ -1,4 +1,4 @@
-"""Tests of common.radar.bistatic: 001 [1]-[3], g of [47] and its Jacobian."""
+"""Tests of common.radar.geometry.bistatic: 001 [1]-[3], g of [47] and its Jacobian."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from common.radar.bistatic import (
+from common.radar.geometry.bistatic import (
     azimuth,
     bistatic_range,
     bistatic_range_rate,

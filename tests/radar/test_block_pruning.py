@@ -1,4 +1,4 @@
-"""Pruning of module 62's blocks (common.radar.localisation.block_localise): the Taylor
+"""Pruning of module 62's blocks (common.radar.geometry.localisation.block_localise): the Taylor
 bounds of `_keep` prune no block whose reach (the box of its leaf centres) holds a point
 within k sigma of every measurement (exhaustive grid of points in random blocks), and
 the blocks kept at the last level, hence the zones [36]-[41], are those of 001's bounds
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.radar import localisation
-from common.radar.localisation import Constraints, block_localise, residuals
+from common.radar.geometry import localisation
+from common.radar.geometry.localisation import Constraints, block_localise, residuals
 
 K_SIGMA = 3.0
 

@@ -1,13 +1,13 @@
-"""Equivalent measurements (common.radar.decorrelation) recovered from the reports of the real
-elementary tracker (common.radar.elementary) equal the fused plots it used."""
+"""Equivalent measurements (common.radar.fusion.decorrelation) recovered from the reports of the real
+elementary tracker (common.radar.elementary.tracker) equal the fused plots it used."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from common.radar.decorrelation import Decorrelator
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.plot_fusion import Plots
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.decorrelation import Decorrelator
+from common.radar.plots.channel_fusion import Plots
 
 SIG = np.array([150.0, 1.5, np.radians(1.0)])
 

@@ -7,13 +7,18 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from common.radar.elementary import (
-    H, ElementaryParams, ElementaryTracker, RadarCrossingParams, drop_acceleration, gate_pairs,
-)
-from common.radar.elementary_init import compatible, initial_state, propagate
 from common.core.rejection import Rejected
-from common.radar.plot_fusion import Plots
 from common.core.track_table import Status
+from common.radar.elementary.initiation import compatible, initial_state, propagate
+from common.radar.elementary.tracker import (
+    ElementaryParams,
+    ElementaryTracker,
+    H,
+    RadarCrossingParams,
+    drop_acceleration,
+    gate_pairs,
+)
+from common.radar.plots.channel_fusion import Plots
 
 SIG = (100.0, 2.0, 0.01)
 
@@ -221,7 +226,7 @@ def test_drop_acceleration_keeps_the_estimate_as_variance() -> None:
 
 
 def test_crossing_candidates_match_brute_force() -> None:
-    from common.radar.elementary import neighbours
+    from common.radar.elementary.tracker import neighbours
     rng = np.random.default_rng(5)
     z = np.column_stack([rng.uniform(0, 2e4, 300), rng.uniform(0, 2 * np.pi, 300)])
     s = np.column_stack([rng.uniform(50, 150, 300), rng.uniform(0.005, 0.02, 300)])

@@ -1,4 +1,4 @@
-"""Ambiguous memberships of global tracks (common.radar.global_assoc.ambiguous_members):
+"""Ambiguous memberships of global tracks (common.radar.fusion.assoc.ambiguous_members):
 two tracks whose elementary tracks of one base pass [48] against each other's track do
 not use that base's measurements this scan (dense1000.toml: the swapped elementary
 tracks of two aircraft 540 m apart pulled both tracks' altitudes 0.6-1.1 km off)."""
@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from common.core.gating import chi2_gate
-from common.radar.bistatic import project
-from common.radar.global_assoc import ETrackSet, ambiguous_members
+from common.radar.fusion.assoc import ETrackSet, ambiguous_members
+from common.radar.geometry.bistatic import project
 
 GAMMA = chi2_gate(0.999, 3)
 SWAP = chi2_gate(0.999, 1)

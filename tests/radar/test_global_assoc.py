@@ -1,4 +1,4 @@
-"""Tests of module 63 (common.radar.global_assoc): g [47] Jacobian, distance [48], the
+"""Tests of module 63 (common.radar.fusion.assoc): g [47] Jacobian, distance [48], the
 per-component gate, the two-best-candidates resolution loop."""
 
 from __future__ import annotations
@@ -6,9 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.radar.bistatic import project, project_jacobian
-from common.radar.global_assoc import (ETrackSet, component_gamma, component_gate, distance,
-                                       gated_component_pairs, gated_pairs, projections, resolve)
+from common.radar.fusion.assoc import (
+    ETrackSet,
+    component_gamma,
+    component_gate,
+    distance,
+    gated_component_pairs,
+    gated_pairs,
+    projections,
+    resolve,
+)
+from common.radar.geometry.bistatic import project, project_jacobian
 
 TX = np.array([-35000.0, 20000.0, 300.0])
 RX = np.array([0.0, 0.0, 30.0])

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from common.deploy.config import RadarBase
 from common.core.track_table import Status
-from common.radar.bistatic import project
-from common.radar.elementary import ElementaryTracks
-from common.radar.global_assoc import ETrackSet
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
+from common.deploy.config import RadarBase
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.assoc import ETrackSet
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import project
 
 RX = np.zeros((4, 3)) + [0.0, 0.0, 30.0]
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0],

@@ -1,5 +1,5 @@
-"""Tests of module 65 (common.radar.global_ekf) and of the cycle / management of module 61
-(common.radar.global_fusion) on elementary tracks synthesised from truth."""
+"""Tests of module 65 (common.radar.fusion.ekf) and of the cycle / management of module 61
+(common.radar.fusion.cycle) on elementary tracks synthesised from truth."""
 
 from __future__ import annotations
 
@@ -7,16 +7,15 @@ import numpy as np
 import pytest
 
 from common.core import kalman
-from common.radar.bistatic import POS, project
-from common.deploy.config import RadarBase
-from common.radar.global_ekf import fused_update, observation
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.plot_fusion import Plots
 from common.core.track_table import STATUS_NAME, Status
+from common.deploy.config import RadarBase
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.ekf import fused_update, observation
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import POS, project
+from common.radar.plots.channel_fusion import Plots
 from common.wire.radar_messages import etracks_from, gtracks_message
-
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0], [5000.0, -52000.0, 400.0]])
@@ -164,7 +163,7 @@ def test_pure_prediction_deletion_and_recycling() -> None:
 def test_track_of_a_departed_target_is_reported_coasting() -> None:
     """Target 0 leaves: every base still reports its elementary track, in pure
     prediction. The global track stays confirmed one cycle and is reported coasting
-    from the second (coast_cycles = 2, common.radar.global_status); the other target's
+    from the second (coast_cycles = 2, common.radar.fusion.status); the other target's
     track stays confirmed."""
     syn = _Synth(np.random.default_rng(8))
     gf = GlobalFusion(BASES, FusionParams())

@@ -1,6 +1,6 @@
 """Ghost global tracks of dense1000.toml (issue 14): a track holding some bases of a
 target at a wrong altitude with a small sigma_z while the target's own track holds the
-other bases, or a track of two targets' elementary tracks (common.radar.global_merge.
+other bases, or a track of two targets' elementary tracks (common.radar.fusion.merge.
 explained)."""
 
 from __future__ import annotations
@@ -9,11 +9,11 @@ import numpy as np
 
 from common.core.gating import chi2_gate
 from common.deploy.config import RadarBase
-from common.radar.bistatic import project
-from common.radar.global_assoc import ETrackSet, component_gamma
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.global_merge import duplicate_pairs, explained
+from common.radar.fusion.assoc import ETrackSet, component_gamma
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.merge import duplicate_pairs, explained
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import project
 
 GAMMA = chi2_gate(0.999, 3)
 RX = np.zeros((4, 3)) + [0.0, 0.0, 30.0]

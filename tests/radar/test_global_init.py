@@ -1,4 +1,5 @@
-"""Tests of module 62 (common.radar.global_init) and the block localisation (common.radar.localisation)."""
+"""Tests of module 62 (common.radar.fusion.initiation) and the block localisation
+(common.radar.geometry.localisation)."""
 
 from __future__ import annotations
 
@@ -6,15 +7,15 @@ import numpy as np
 import pytest
 
 from common.core.angles import wrap_pi
-from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate, ellipsoid_point
-from common.radar.global_init import (
+from common.radar.fusion.initiation import (
     azimuth_pairs,
     coarse_intersection,
     initial_state,
     pair_velocity,
     select,
 )
-from common.radar.localisation import Constraints, block_localise, gauss_newton
+from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate, ellipsoid_point
+from common.radar.geometry.localisation import Constraints, block_localise, gauss_newton
 
 RX = np.array([0.0, 0.0, 0.0])
 TX = np.array([[-35000.0, 20000.0, 0.0], [45000.0, 10000.0, 0.0], [5000.0, -52000.0, 0.0]])

@@ -1,4 +1,4 @@
-"""Module 64 during tracking (common.radar.localisation.linearised_position): the scan's
+"""Module 64 during tracking (common.radar.geometry.localisation.linearised_position): the scan's
 position measurement is honest (NEES against truth) and, once the position is known,
 its information is the Jacobian's."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from common.radar.localisation import Constraints, linearised_position, residuals
 from common.evaluation.pcrlb import mean_nees_interval
+from common.radar.geometry.localisation import Constraints, linearised_position, residuals
 
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0], [5000.0, -52000.0, 400.0]])
 RX = np.array([[0.0, 0.0, 30.0]] * 3)  # crossing.toml

@@ -1,4 +1,4 @@
-"""common.radar.global_merge: duplicate global tracks (disjoint bases, positions within
+"""common.radar.fusion.merge: duplicate global tracks (disjoint bases, positions within
 the gate) are paired closest first; tracks sharing a base never are."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from common.core.gating import chi2_gate
-from common.radar.global_merge import duplicate_pairs
+from common.radar.fusion.merge import duplicate_pairs
 
 GAMMA = chi2_gate(0.999, 3)
 
@@ -81,10 +81,10 @@ def _two_tracks(offset: list[float]) -> tuple:
     at `offset` from it, slot 1 on it, both holding elementary tracks 4 and 5, and the
     elementary track set E of those two (TRUTH projected): (fusion, slots, E)."""
     from common.deploy.config import RadarBase
-    from common.radar.bistatic import project
-    from common.radar.global_assoc import ETrackSet
-    from common.radar.fusion_params import FusionParams
-    from common.radar.global_fusion import GlobalFusion
+    from common.radar.fusion.assoc import ETrackSet
+    from common.radar.fusion.cycle import GlobalFusion
+    from common.radar.fusion.params import FusionParams
+    from common.radar.geometry.bistatic import project
 
     rx = np.array([0.0, 0.0, 30.0])
     tx = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0]])
@@ -157,7 +157,7 @@ def test_a_published_number_is_not_given_up_to_a_held_one() -> None:
     of its new elementary tracks (number_kept: tentative under 530), was confirmed again
     at t = 63 and then took the held number of a removed track that had held two of
     those elementary tracks. A number already published stays; a new one is replaced
-    (common.radar.global_succession)."""
+    (common.radar.fusion.succession)."""
     tab, out = _reconfirmed(True)
     assert out.id.tolist() == [tab.first_id + 1]
     tab, out = _reconfirmed(False)

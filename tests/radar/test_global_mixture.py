@@ -1,5 +1,5 @@
-"""Tests of the altitude bands x IMM models state of global tracks (common.radar.global_mixture,
-common.radar.global_init.altitude_bands) and of modules 62-63 with four bases."""
+"""Tests of the altitude bands x IMM models state of global tracks (common.radar.fusion.mixture,
+common.radar.fusion.initiation.altitude_bands) and of modules 62-63 with four bases."""
 
 from __future__ import annotations
 
@@ -9,19 +9,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from common.radar import global_mixture as gm
 from common.core import imm
-from common.radar.bistatic import POS, bistatic_range, project
 from common.deploy.config import load
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.global_init import InitParams, altitude_bands
-from common.radar.plot_fusion import Plots
-from common.wire.radar_chain import RadarChain
-from common.wire.radar_messages import gtracks_message
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion import mixture as gm
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.initiation import InitParams, altitude_bands
+from common.radar.fusion.params import FusionParams
+from common.radar.geometry.bistatic import POS, bistatic_range, project
+from common.radar.plots.channel_fusion import Plots
 from common.sim.scenario import load_scenario
 from common.sim.simulator import run_scenario
+from common.wire.radar_chain import RadarChain
+from common.wire.radar_messages import gtracks_message
 
 A, M = 3, 2
 DENSE = Path(__file__).resolve().parents[2] / "scenarios" / "dense.toml"
@@ -114,7 +114,7 @@ def test_altitude_bands_hold_a_low_target() -> None:
 
 
 def test_altitude_bands_of_more_bases_with_gaps() -> None:
-    """Rows (W, K) with -1 for none (common.radar.global_reopen): a -1 column changes
+    """Rows (W, K) with -1 for none (common.radar.fusion.reopen): a -1 column changes
     nothing, and a third base narrows every band's position covariance."""
     cfg = load(DENSE)
     tx = np.array([b.tx for b in cfg.bases[:3]])

@@ -1,4 +1,4 @@
-"""Tests of the altitude re-opened after a lost member (common.radar.global_reopen): a
+"""Tests of the altitude re-opened after a lost member (common.radar.fusion.reopen): a
 track held at a wrong altitude with a small variance (dense1000 seed 7, aircraft 931)
 is rebuilt from its sound members and then admits its own elementary track of the base
 it had lost; when they leave the altitude open its vertical variances are floored at
@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from common.radar.bistatic import POS, project
-from common.radar.global_assoc import ETrackSet, component_gate
-from common.radar.global_filter import MixtureFilter
-from common.radar.fusion_params import FusionParams
-from common.radar.global_reopen import contradicted, floor_vertical, reopen, sound_members
 from common.core.gating import chi2_gate
-from common.radar.localisation import Constraints, gauss_newton
+from common.radar.fusion.assoc import ETrackSet, component_gate
+from common.radar.fusion.params import FusionParams
+from common.radar.fusion.reopen import contradicted, floor_vertical, reopen, sound_members
+from common.radar.fusion.track_filter import MixtureFilter
+from common.radar.geometry.bistatic import POS, project
+from common.radar.geometry.localisation import Constraints, gauss_newton
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0],

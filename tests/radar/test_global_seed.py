@@ -13,15 +13,15 @@ import pytest
 
 from common.deploy.config import load, parse, section
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
-from common.radar import global_fusion as gfm
-from common.radar.bistatic import POS, project
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.global_filter import BandFixes
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.global_init import Candidates, InitParams
-from common.radar.localisation import Constraints, block_localise, gauss_newton
-from common.radar.plot_fusion import Plots
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion import cycle as gfm
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.initiation import Candidates, InitParams
+from common.radar.fusion.params import FusionParams
+from common.radar.fusion.track_filter import BandFixes
+from common.radar.geometry.bistatic import POS, project
+from common.radar.geometry.localisation import Constraints, block_localise, gauss_newton
+from common.radar.plots.channel_fusion import Plots
 from common.sim.scenario import load_scenario, radar_scene
 from common.sim.simulator import run_scenario
 from common.wire.radar_chain import RadarChain

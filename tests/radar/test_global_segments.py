@@ -1,4 +1,4 @@
-"""Track segment association (common.radar.global_segments): a confirmed global track
+"""Track segment association (common.radar.fusion.segments): a confirmed global track
 whose elementary tracks all ended keeps its number in the track confirmed after it on the
 same aircraft, when the aircraft turned in between (dense1000 seed 9, aircraft 905)."""
 
@@ -11,12 +11,12 @@ import numpy as np
 from common.core.gating import chi2_gate
 from common.core.track_table import Status
 from common.deploy.config import RadarBase
-from common.radar.bistatic import project
-from common.radar.elementary import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion_params import FusionParams
-from common.radar.global_fusion import GlobalFusion
-from common.radar.global_segments import manoeuvre_envelope, segment_pairs
-from common.radar.plot_fusion import Plots
+from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.cycle import GlobalFusion
+from common.radar.fusion.params import FusionParams
+from common.radar.fusion.segments import manoeuvre_envelope, segment_pairs
+from common.radar.geometry.bistatic import project
+from common.radar.plots.channel_fusion import Plots
 
 GATE = chi2_gate(0.999, 6)
 P_TRACK = np.diag([60.0**2, 5.0**2, 60.0**2, 5.0**2, 300.0**2, 2.0**2])

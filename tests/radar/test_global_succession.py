@@ -1,12 +1,12 @@
 """Number succession of global tracks through their elementary tracks
-(common.radar.global_succession)."""
+(common.radar.fusion.succession)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from common.core.track_table import Status, TrackTable
-from common.radar.global_succession import Succession
+from common.radar.fusion.succession import Succession
 
 B = 4
 

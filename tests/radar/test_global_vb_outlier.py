@@ -1,5 +1,5 @@
-"""Tests of the leave-one-out test of the v_b rows of 001 [49] (common.radar.global_ekf.
-vb_deletion_residuals, common.radar.global_filter.MixtureFilter.locate): an elementary
+"""Tests of the leave-one-out test of the v_b rows of 001 [49] (common.radar.fusion.ekf.
+vb_deletion_residuals, common.radar.fusion.track_filter.MixtureFilter.locate): an elementary
 track that swapped to a neighbour's target at the base whose v_b alone observes vz is
 left out and dissociated (benchmarks/dense_scale.py, dense1000)."""
 
@@ -11,11 +11,11 @@ import numpy as np
 
 from common.core import kalman
 from common.core.gating import chi2_gate
-from common.radar.bistatic import POS, project
-from common.radar.global_assoc import distance, projections
-from common.radar.global_ekf import observation, vb_deletion_residuals
-from common.radar.global_filter import MixtureFilter
-from common.radar.fusion_params import FusionParams
+from common.radar.fusion.assoc import distance, projections
+from common.radar.fusion.ekf import observation, vb_deletion_residuals
+from common.radar.fusion.params import FusionParams
+from common.radar.fusion.track_filter import MixtureFilter
+from common.radar.geometry.bistatic import POS, project
 
 RX = np.array([0.0, 0.0, 30.0])
 TX = np.array([[-35000.0, 20000.0, 300.0], [45000.0, 10000.0, 500.0],

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from common.radar.bistatic import project
-from common.radar.elementary import ElementaryTracks
-from common.radar.global_report import GlobalTracks
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.report import GlobalTracks
+from common.radar.geometry.bistatic import project
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from origin_switches import OriginLabels  # noqa: E402

@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 
 from common.core.rejection import Rejected
-from common.radar.plot_fusion import (
-    PlotFusion, Plots, accept, aggregate, components, fuse, fuse_scan,
+from common.radar.plots.channel_fusion import (
+    PlotFusion,
+    Plots,
+    accept,
+    aggregate,
+    components,
+    fuse,
+    fuse_scan,
 )
 
 

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from common.wire import protocol
-from common.radar.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.deploy.config import RadarBase, SonarArray, load
+from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.sim.mover import Mover
 from common.sim.scenario import SonarArraySim
-from common.sim.sonar import bearing_sigma
 from common.sim.simulator import load_scenario, run_scenario
+from common.sim.sonar import bearing_sigma
+from common.wire import protocol
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BASES = [

@@ -1,15 +1,16 @@
 """Crossings that hold (issue 13): the bearing tracker's IMM in seed 004's memory mode
-(common.sonar.bearing_imm, common.sonar.bearing_tracker)."""
+(common.sonar.bearing.imm, common.sonar.bearing.tracker)."""
 
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from common.core.crossing import CrossingParams
 from common.core.motion import bearing_F, bearing_Q
-from common.sonar.bearing_imm import BearingImm
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams
+from common.sonar.bearing.imm import BearingImm
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams
 
 BB = TrackerParams(mode="broadband", q_theta=1e-6, q_theta_quiet=1e-10)
 SIG = math.radians(0.5)

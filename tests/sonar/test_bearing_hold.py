@@ -1,5 +1,5 @@
-"""Bearing tracks that hold (issue 13): the bearing-rate IMM (common.sonar.bearing_imm) and
-the merging of a tentative track into a confirmed one (common.sonar.bearing_merge)."""
+"""Bearing tracks that hold (issue 13): the bearing-rate IMM (common.sonar.bearing.imm) and
+the merging of a tentative track into a confirmed one (common.sonar.bearing.merge)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from common.sonar.bearing_merge import merged_tentative
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams
+from common.sonar.bearing.merge import merged_tentative
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams
 
 BB = TrackerParams(mode="broadband", crossing=False, clutter_level_db=2.0)
 SIG = math.radians(1.0)

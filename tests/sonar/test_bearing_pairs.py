@@ -1,4 +1,4 @@
-"""common.sonar.bearing_pairs: the pairs of 004's memory mode, the release of a pair whose
+"""common.sonar.bearing.pairs: the pairs of 004's memory mode, the release of a pair whose
 order is known, the centroid measurement and the common-mode update; and, through the
 single-hypothesis tracker, crossings that swapped before the rule."""
 
@@ -11,7 +11,7 @@ import pytest
 
 from benchmarks import mht as MH
 from benchmarks import sonar_hold as SH
-from common.sonar.bearing_pairs import (
+from common.sonar.bearing.pairs import (
     centroid_measurements,
     common_mode_update,
     memory_pairs,

@@ -1,7 +1,7 @@
 """A second target's young track next to a confirmed track (issue 13, sonar_cross_4dpm_eq
 seed 33 lost its second target this way): it keeps the detections the confirmed track
-did not take (common.sonar.bearing_assoc) and is not merged into the confirmed track
-while its bearing rate differs (common.sonar.bearing_merge, 000 d_merge over the state)."""
+did not take (common.sonar.bearing.assoc) and is not merged into the confirmed track
+while its bearing rate differs (common.sonar.bearing.merge, 000 d_merge over the state)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 
-from common.sonar.bearing_assoc import associate
-from common.sonar.bearing_merge import merged_tentative
-from common.sonar.bearing_model import measurement_matrix
+from common.sonar.bearing.assoc import associate
+from common.sonar.bearing.merge import merged_tentative
+from common.sonar.bearing.model import measurement_matrix
 
 SIG = math.radians(1.0)
 RATE = math.radians(2.0) / 60.0  # 2 deg/min, rad/s

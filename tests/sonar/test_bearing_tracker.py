@@ -11,7 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.sonar.bearing_model import (
+from common.core.crossing import CrossingParams
+from common.core.rejection import Rejected
+from common.sonar.bearing.model import (
     gate_value,
     linear_array_sigma,
     measurement_matrix,
@@ -19,10 +21,8 @@ from common.sonar.bearing_model import (
     quality_increment,
     thresholds,
 )
-from common.core.rejection import Rejected
-from common.sonar.bearing_tracker import BearingTracker, TrackerParams
-from common.core.crossing import CrossingParams
-from common.sonar.multiline import NEW, MultiLineGrouper
+from common.sonar.bearing.multiline import NEW, MultiLineGrouper
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams
 
 DEG = math.pi / 180.0
 BB = TrackerParams(mode="broadband")

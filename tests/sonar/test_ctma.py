@@ -1,20 +1,13 @@
-"""Tests for common.sonar.ctma and ctma_bounds (seed 003): CTMA, residual factor, edge checks, correction, convergence."""
+"""Tests for common.sonar.tma.constrained and common.sonar.tma.bounds (seed 003): CTMA, residual
+factor, edge checks, correction, convergence."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from common.sonar.crlb import position_rms_bound
-from common.sonar.ctma import (
-    ConvergenceDetector,
-    CtmaParams,
-    TmaTracker,
-    residual_alarm,
-    residual_factor,
-    solve_ctma,
-)
-from common.sonar.ctma_bounds import (
+from common.sonar.tma.bearings_only import solve_tma
+from common.sonar.tma.bounds import (
     MINIMAL_BOUNDS,
     Bounds,
     edge_flags,
@@ -23,7 +16,15 @@ from common.sonar.ctma_bounds import (
     rkv,
     state_bounds,
 )
-from common.sonar.tma import solve_tma
+from common.sonar.tma.constrained import (
+    ConvergenceDetector,
+    CtmaParams,
+    TmaTracker,
+    residual_alarm,
+    residual_factor,
+    solve_ctma,
+)
+from common.sonar.tma.crlb import position_rms_bound
 from tests.sonar.test_tma import BETA, BETA2, KN, OWN, SIG, TM, T, pos_at, true_bearings
 
 D = np.radians

@@ -1,4 +1,4 @@
-"""Tests of 003 claim 9 / paragraph 55 (common.sonar.ctma_solve, ctma): bounds per target leg.
+"""Tests of 003 claim 9 / paragraph 55 (common.sonar.tma.constrained_solve, ctma): bounds per target leg.
 
 Scene: own ship 8 kn zig-zagging 45/135 deg every 6 min, one bearing every 20 s for an
 hour, sigma 0.5 deg. The target (2, 6) km from the own start runs 5 kn on 239.5 deg, and
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from common.core.angles import TWO_PI
-from common.sonar.crlb import position_rms_bound
-from common.sonar.ctma import CtmaParams, TmaTracker
-from common.sonar.ctma_solve import new_leg_bounds, solve_ctma
-from common.sonar.ctma_bounds import Bounds
-from common.sonar.tma import solve_tma, state_map
+from common.sonar.tma.bearings_only import solve_tma, state_map
+from common.sonar.tma.bounds import Bounds
+from common.sonar.tma.constrained import CtmaParams, TmaTracker
+from common.sonar.tma.constrained_solve import new_leg_bounds, solve_ctma
+from common.sonar.tma.crlb import position_rms_bound
 
 D = np.radians
 KN = 1852.0 / 3600.0

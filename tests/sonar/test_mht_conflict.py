@@ -1,4 +1,4 @@
-"""Resolution conflicts of the 000 multiple-hypothesis mode (common.sonar.mht_conflict):
+"""Resolution conflicts of the 000 multiple-hypothesis mode (common.sonar.mht.conflict):
 the unresolved measurement by the unscented transform, interpretations (1)-(5) reduced
 by moment matching, the re-link choice at the end of a conflict."""
 
@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 
-from common.sonar.mht_conflict import (h_unresolved, interpret, relink_choice,
-                                       unresolved_probability, unscented)
+from common.sonar.mht.conflict import h_unresolved, interpret, relink_choice, unresolved_probability, unscented
 
 DEG = math.radians(1.0)
 

@@ -1,11 +1,11 @@
-"""000 P_D from the predicted amplitude (erfc law), common.sonar.bearing_model."""
+"""000 P_D from the predicted amplitude (erfc law), common.sonar.bearing.model."""
 
 import math
 
 import numpy as np
 from scipy.stats import norm
 
-from common.sonar.bearing_model import detection_probability
+from common.sonar.bearing.model import detection_probability
 
 
 def test_pd_at_threshold_is_half_of_pd_max():

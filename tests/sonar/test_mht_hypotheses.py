@@ -1,14 +1,23 @@
 """Equations of the 000 multiple-hypothesis mode on flat hypothesis arrays
-(common.sonar.mht_hypotheses), one test per equation."""
+(common.sonar.mht.hypotheses), one test per equation."""
 
 import math
 
 import numpy as np
 from scipy.stats import multivariate_normal
 
-from common.sonar.mht_hypotheses import (heaviest, hit_weights, merge_apply, merge_clusters,
-                                         miss_weights, mixture_moments, pair_distance2, prune,
-                                         sprt, track_sums)
+from common.sonar.mht.hypotheses import (
+    heaviest,
+    hit_weights,
+    merge_apply,
+    merge_clusters,
+    miss_weights,
+    mixture_moments,
+    pair_distance2,
+    prune,
+    sprt,
+    track_sums,
+)
 
 
 def test_hit_and_miss_weights_hand_values():

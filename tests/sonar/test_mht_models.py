@@ -1,4 +1,4 @@
-"""The bearing-rate models of the multiple-hypothesis mode (common.sonar.mht_models): a model
+"""The bearing-rate models of the multiple-hypothesis mode (common.sonar.mht.models): a model
 label per hypothesis, branching with the Markov chain of the IMM, the quiet model only in a
 resolution conflict."""
 
@@ -8,9 +8,10 @@ import math
 
 import numpy as np
 
-from common.sonar.bearing_tracker import TrackerParams
-from common.sonar.mht import MhtParams, MhtTracker
-from common.sonar.mht_models import branch
+from common.sonar.bearing.tracker import TrackerParams
+from common.sonar.mht.models import branch
+from common.sonar.mht.params import MhtParams
+from common.sonar.mht.tracker import MhtTracker
 
 DEG = math.radians(1.0)
 P = TrackerParams(mode="broadband")  # IMM defaults: q_theta_quiet 1e-10 < q_theta 1e-8

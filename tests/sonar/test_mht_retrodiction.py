@@ -1,11 +1,11 @@
-"""Retrodiction of the 000 multiple-hypothesis mode (common.sonar.retrodiction)."""
+"""Retrodiction of the 000 multiple-hypothesis mode (common.sonar.mht.retrodiction)."""
 
 import math
 
 import numpy as np
 
 from common.core.motion import bearing_F, bearing_Q
-from common.sonar.retrodiction import CycleRecord, Retrodiction, smooth
+from common.sonar.mht.retrodiction import CycleRecord, Retrodiction, smooth
 
 H = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
 R = np.diag([1e-4, 4.0])

@@ -1,4 +1,4 @@
-"""The 000 multiple-hypothesis bearing tracker cycle (common.sonar.mht): initialisation,
+"""The 000 multiple-hypothesis bearing tracker cycle (common.sonar.mht.tracker): initialisation,
 SPRT confirmation, clutter, caps, track merge, deletion, crossing conflicts, the
 retrodicted register and the [sonar.tracker] mode switch."""
 
@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from common.deploy.config import ConfigError, parse, section
-from common.sonar.bearing_tracker import TrackerParams
-from common.sonar.mht import MhtParams, MhtTracker, SonarTrackerParams
+from common.sonar.bearing.tracker import TrackerParams
+from common.sonar.mht.params import MhtParams, SonarTrackerParams
+from common.sonar.mht.tracker import MhtTracker
 
 DEG = math.radians(1.0)
 P = TrackerParams(mode="broadband", q_theta=1e-11, init_brg_rate_sigma=6e-4)
@@ -244,8 +245,8 @@ def test_relink_of_a_new_track_to_a_coalesced_pair_by_the_continuation_of_both()
     omega, the rising target's new track at 1 rad + 2 deg, continues track 1's state from
     before the conflict (rising from - 2 deg) and the pair continues track 2's, although
     omega's young rate estimate is falling (the seed's sign rule would give it track 2)."""
-    from common.sonar.mht_conflict import relink_choice
-    from common.sonar.mht_tracks import relink
+    from common.sonar.mht.conflict import relink_choice
+    from common.sonar.mht.tracks import relink
 
     trk = _coalesced_pair(1.0 + 2 * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
     tr = trk.tr
@@ -262,7 +263,7 @@ def test_a_new_track_that_continues_neither_member_goes_by_the_pair_s_own_eviden
     6 deg below, is outside the gate of both predictions in bearing, nearer track 1's: no
     evidence, so track 2 takes it and track 1 keeps its target (sonar_cross_4dpm_uneq seed
     169: by both pairings omega went to the track whose prediction it missed by less)."""
-    from common.sonar.mht_tracks import relink
+    from common.sonar.mht.tracks import relink
 
     trk = _coalesced_pair(1.0 - 6 * DEG, (1.0 + 2 * DEG, 1.0 + 2 * DEG))
     tr = trk.tr
@@ -284,7 +285,7 @@ def test_a_new_track_beside_a_pair_that_holds_both_targets_is_a_duplicate(omega_
     took the rising track's place). Omega resolved from the pair (3.7 sigma, outside the
     gate) is a target it lost and is re-linked (cross_slow seed 268: one of the pair, pulled
     onto the other's target, kept a distinct young rate)."""
-    from common.sonar.mht_tracks import relink
+    from common.sonar.mht.tracks import relink
 
     trk = _coalesced_pair(1.0 + omega_deg * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
     tr = trk.tr
@@ -299,7 +300,7 @@ def test_a_conflict_ended_by_a_relink_leaves_no_memory_to_the_next():
     the re-linked track's state of this cycle is omega's, so a conflict that starts again
     next cycle takes omega's state as the one from before it (cross_slow seed 150: the
     dropped state, on the other target, was taken and the next end of conflict swapped)."""
-    from common.sonar.mht_tracks import _pair_sharing, relink
+    from common.sonar.mht.tracks import _pair_sharing, relink
 
     trk = _coalesced_pair(1.0 + 2 * DEG, (1.0 - 2 * DEG, 1.0 - 2 * DEG))
     tr = trk.tr
@@ -319,7 +320,7 @@ def test_a_coalesced_pair_leaving_its_conflict_takes_the_order_it_had_before(mai
     """At the end of a coalesced conflict each track keeps the main hypothesis that
     continues its own state from before: split in the bounced order (track 1 below, where
     the falling target went), the two exchange their hypotheses; in the crossed order not."""
-    from common.sonar.mht_tracks import crossing_order
+    from common.sonar.mht.tracks import crossing_order
 
     trk = _coalesced_pair(None, mains)
     main = np.array([0, 1])

@@ -1,4 +1,4 @@
-"""Tests for common.sonar.tma (seed 002) and common.sonar.crlb.
+"""Tests for common.sonar.tma.bearings_only (seed 002) and common.sonar.tma.crlb.
 
 Scenario of the literature (Nardone, Lindgren & Gong 1984): own ship 5 kn, course 140 deg;
 the course is set to 110, 80, 50, 20 deg at samples 13, 14, 15, 16 (1-based, one
@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from common.core.angles import wrap_pi
-from common.sonar.crlb import crlb, fisher_information, position_rms_bound
-from common.sonar.tma import (
+from common.sonar.tma.bearings_only import (
     Support,
     bearing_model,
     detect_manoeuvre,
@@ -23,6 +22,7 @@ from common.sonar.tma import (
     state_map,
     support_rows,
 )
+from common.sonar.tma.crlb import crlb, fisher_information, position_rms_bound
 
 KN = 1852.0 / 3600.0
 SIG = np.radians(1.5)

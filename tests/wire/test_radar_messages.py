@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from common.core.track_table import Status
-from common.radar.elementary import ElementaryTracks
-from common.radar.global_report import GlobalTracks
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.report import GlobalTracks
 from common.wire import protocol
 from common.wire.radar_messages import etracks_from, etracks_message, etracks_of, gtracks_message
 

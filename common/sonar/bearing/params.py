@@ -1,0 +1,89 @@
+"""[sonar.tracker] parameters of seed 000's bearing tracker (both association modes share
+them) and the motion model they set: 000 F and Q of the straight-line-segment model,
+broadband x = [brg, brg_rate, level, level_rate] or narrowband with [freq, freq_rate].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
+
+
+@dataclass(frozen=True)
+class TrackerParams:
+    """[sonar.tracker] parameters (000 first embodiment).
+
+    mode: "broadband" z = [brg, amp], "narrowband" z = [brg, amp, freq], or "auto"
+        (the service picks narrowband when the first detection list carries freq[]).
+    q_theta, q_a, q_f: process noise powers of Q (rad^2/s^3, dB^2/s^3, Hz^2/s^3).
+    q_theta_quiet: bearing noise power of the quiet model of the bearing-rate IMM, whose
+        manoeuvre model has q_theta (common.sonar.bearing.imm); the IMM runs when
+        0 < q_theta_quiet < q_theta, a single model with q_theta otherwise.
+    imm_sojourn_s: mean sojourn times (s) of the quiet and the manoeuvre model.
+    sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
+    p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL);
+        p_d is P_D_max of the amplitude law when clutter_level_db > 0.
+    d_thr: detection threshold D_thr (dB level) of the amplitude laws.
+    clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
+        its predicted amplitude (000 erfc law) and P_FA of a detection from its level
+        (bearing_model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
+        Off by default: on the tuned 4 deg/min unequal-speed crossing
+        (sonar_cross_4dpm_uneq, 50 runs through the processes) the law at 2 dB gave 4
+        swap runs with crossing management (0 without it) and 15 without (4); the
+        scenes written for clutter (sonar_hold*) set it.
+    beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
+    alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
+    delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
+    endfire_deg: floor of |sin(brg - heading)| in the linear-array sigma law.
+    init_*_rate_sigma: P0 of the rates (brg rad/s, amp dB/s, freq Hz/s).
+    crossing: run seed 004 crossing management ([sonar.crossing]) on confirmed tracks.
+    band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
+    ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
+    history_keep_deleted: deleted confirmed tracks whose history stays queryable.
+    d_merge: a tentative track within this squared distance of a confirmed track (whole
+        state, both covariances) is dropped (000 d_merge; 9.21: the 94 % chi-square
+        quantile of 4 degrees of freedom).
+    """
+
+    mode: Literal["auto", "broadband", "narrowband"] = "auto"
+    q_theta: float = 1e-8
+    q_theta_quiet: float = 1e-10
+    imm_sojourn_s: list[float] = field(default_factory=lambda: [600.0, 60.0])
+    q_a: float = 1e-4
+    q_f: float = 1e-6
+    sigma_amp_db: float = 3.0
+    sigma_freq_hz: float = 0.05
+    p_d: float = 0.9
+    p_fa: float = 1e-3
+    d_thr: float = 3.0
+    clutter_level_db: float = 0.0
+    beam_spacing_deg: float = 2.0
+    alpha: float = 1e-4
+    beta: float = 1e-2
+    delete_drop: float = 12.0
+    endfire_deg: float = 10.0
+    init_brg_rate_sigma: float = 0.002
+    init_amp_rate_sigma: float = 0.05
+    init_freq_rate_sigma: float = 0.002
+    crossing: bool = True
+    band_hz: list[float] = field(default_factory=lambda: [10.0, 1000.0])
+    ml_brg_tol_deg: float = 2.0
+    ml_rate_tol_deg_s: float = 0.1
+    history_keep_deleted: int = 64
+    d_merge: float = 9.21
+
+
+def transition(narrowband: bool, T: np.ndarray | float) -> np.ndarray:
+    """000 F over T seconds (common.core.motion), broadband or narrowband state."""
+    return bearing_freq_F(T) if narrowband else bearing_F(T)
+
+
+def process_noise(p: TrackerParams, narrowband: bool, T: np.ndarray | float,
+                  q_theta: float | None = None) -> np.ndarray:
+    """000 Q over T seconds with the bearing noise power q_theta (default p.q_theta)."""
+    q = p.q_theta if q_theta is None else q_theta
+    return bearing_freq_Q(T, q, p.q_a, p.q_f) if narrowband else bearing_Q(T, q, p.q_a)

@@ -1,0 +1,2 @@
+"""Seed 000's multiple-hypothesis mode of the bearing tracker: hypotheses, IMM models,
+track arrays, resolution conflicts and retrodiction. Pure."""
