@@ -21,6 +21,8 @@ from multiprocessing.context import ForkServerContext
 from pathlib import Path
 from typing import IO
 
+from common.bus.transport import hold_early_signals
+
 ENTRY = "common.cli"  # the module of ``pfusion``'s main and COMMANDS (``python -m common`` runs it)
 SUPERVISORS = ("run", "demo")  # commands that start processes of their own: never forked
 
@@ -40,7 +42,9 @@ def _run_command(args: list[str], out: str | Connection | None, env: dict[str, s
                  new_session: bool) -> None:
     """The child: stdout and stderr to ``out`` (a log file's path, the write end of a
     pipe, else /dev/null), the launcher's environment and directory, its own session if
-    asked, then ``pfusion ARGS``; its return is the exit code."""
+    asked, then ``pfusion ARGS``; its return is the exit code. A stop signal that comes
+    before the command's own handlers is held for them (``hold_early_signals``)."""
+    hold_early_signals()
     if isinstance(out, Connection):
         fd = os.dup(out.fileno())
         out.close()

@@ -22,7 +22,16 @@ from typing import Any
 import numpy as np
 import zenoh
 
-from common.bus.transport import LOG_EVERY, Inbox, LossCount, Publisher, SignalBytes, linger, open_session
+from common.bus.transport import (
+    LOG_EVERY,
+    Inbox,
+    LossCount,
+    Publisher,
+    SignalBytes,
+    linger,
+    open_session,
+    stopped_early,
+)
 from common.core.rejection import Rejected
 from common.deploy.config import Config
 from common.wire import protocol
@@ -94,6 +103,8 @@ class Service:
         """Drain the inbox until SIGINT/SIGTERM; returns the process exit code."""
         signal.signal(signal.SIGINT, self.stop)
         signal.signal(signal.SIGTERM, self.stop)
+        if stopped_early():
+            self.stop()
         signals = SignalBytes()  # read by the loop, beside the Python handlers
         token = self.session.liveliness().declare_token(
             f"{self.root}/alive/{self.name}/{self.instance}"

@@ -162,11 +162,30 @@ class SignalBytes:
         self._w.close()
 
 
+_EARLY: list[int] = []  # SIGINT / SIGTERM that arrived before a command's own handlers
+
+
+def hold_early_signals() -> None:
+    """In a command just forked: keep SIGINT / SIGTERM until the command installs its own
+    handlers (``stop_on_signals``, ``Service.run``), which then stop at once. Without it a
+    stop sent while the command still imports or opens its session kills it uncleanly."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda n, _frame: _EARLY.append(n))
+
+
+def stopped_early() -> bool:
+    """Whether SIGINT or SIGTERM arrived while ``hold_early_signals`` held them."""
+    return bool(_EARLY)
+
+
 def stop_on_signals() -> threading.Event:
-    """An event set by SIGINT or SIGTERM: the clean-exit flag of a tool's main loop."""
+    """An event set by SIGINT or SIGTERM: the clean-exit flag of a tool's main loop (set
+    already when one arrived before, see ``hold_early_signals``)."""
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    if stopped_early():
+        stop.set()
     return stop
 
 

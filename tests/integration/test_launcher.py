@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -72,3 +73,16 @@ def test_piped_output_ends_at_exit_and_new_session(tmp_path: Path) -> None:
     router.send_signal(signal.SIGTERM)
     assert b"router stopped" in router.stdout.read()
     assert router.wait(30) == 0
+
+
+def test_a_stop_before_the_handlers_is_held_for_them(tmp_path: Path) -> None:
+    """SIGTERM sent as soon as the forked command exists (while it still opens its
+    session) stops it cleanly: code 0 and its stop line, not -15."""
+    log = tmp_path / "r.log"
+    router = Forked(["router", "--listen", "tcp/127.0.0.1:0"], log, dict(os.environ))
+    deadline = time.monotonic() + 30
+    while not log.exists() and time.monotonic() < deadline:  # the child opens it after the hold
+        time.sleep(0.001)
+    router.send_signal(signal.SIGTERM)
+    assert router.wait(30) == 0
+    assert "router stopped" in log.read_text()
