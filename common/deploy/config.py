@@ -175,7 +175,7 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
         raise ConfigError("zenoh.tls.root_ca", "missing (the CA that certificates chain to)")
     radar = doc.get("radar", {})
     _check_table(radar, "radar")
-    origin = _origin(radar.get("origin"))
+    origin = geo_origin(radar.get("origin"))
     bases = [_radar_base(b, i, origin) for i, b in enumerate(radar.get("base", []))]
     _unique([b.id for b in bases], "radar.base.id")
     sonar = doc.get("sonar", {})
@@ -285,8 +285,8 @@ def _point(v: Any, key: str, geo: bool = False) -> np.ndarray:
     return np.asarray(v, dtype=float)
 
 
-def _origin(o: Any) -> LocalFrame | None:
-    """[radar.origin] lat, lon (deg), alt (m, ellipsoidal), or None (a flat deployment)."""
+def geo_origin(o: Any) -> LocalFrame | None:
+    """Table [radar.origin] (lat, lon deg, alt m ellipsoidal) as a frame; None: flat."""
     if o is not None and (not isinstance(o, dict) or set(o) != {"lat", "lon", "alt"}):
         raise ConfigError("radar.origin", "must be a table of exactly lat, lon (deg), alt (m, ellipsoidal)")
     return None if o is None else LocalFrame(*_point([o["lat"], o["lon"], o["alt"]], "radar.origin", True).tolist())
