@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from common.deploy.ranges import out_of_range
+from common.radar.geometry.geodesy import LocalFrame
 
 # A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
 # whitespace and control characters (ids go into command lines and credential files).
@@ -124,7 +125,8 @@ class Site:
 @dataclass(frozen=True)
 class Config:
     """A parsed deployment file; ``doc`` keeps the raw tables for :func:`section`.
-    ``sites`` is [[site]], or one site per base and per array when the file has none."""
+    ``sites`` is [[site]], or one site per base and per array when the file has none.
+    ``origin``: [radar.origin], the WGS-84 origin of the local ENU frame (None: flat)."""
 
     zenoh: ZenohConfig
     bases: list[RadarBase]
@@ -132,6 +134,7 @@ class Config:
     doc: dict[str, Any]
     path: Path | None = None
     sites: list[Site] = field(default_factory=list)
+    origin: LocalFrame | None = None
 
     def base(self, base_id: str) -> RadarBase:
         for b in self.bases:
@@ -172,14 +175,15 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
         raise ConfigError("zenoh.tls.root_ca", "missing (the CA that certificates chain to)")
     radar = doc.get("radar", {})
     _check_table(radar, "radar")
-    bases = [_radar_base(b, i) for i, b in enumerate(radar.get("base", []))]
+    origin = geo_origin(radar.get("origin"))
+    bases = [_radar_base(b, i, origin) for i, b in enumerate(radar.get("base", []))]
     _unique([b.id for b in bases], "radar.base.id")
     sonar = doc.get("sonar", {})
     _check_table(sonar, "sonar")
     arrays = [_sonar_array(a, i) for i, a in enumerate(sonar.get("array", []))]
     _unique([a.id for a in arrays], "sonar.array.id")
     sites = _sites(doc.get("site"), [b.id for b in bases], [a.id for a in arrays])
-    return Config(zc, bases, arrays, doc, path, sites)
+    return Config(zc, bases, arrays, doc, path, sites, origin)
 
 
 def section(cfg: Config, dotted: str, cls: type[T]) -> T:
@@ -270,22 +274,42 @@ def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
     return sites
 
 
-def _point(v: Any, key: str) -> np.ndarray:
+def _point(v: Any, key: str, geo: bool = False) -> np.ndarray:
     ok = isinstance(v, list) and len(v) == 3 and all(
         isinstance(c, (int, float)) and not isinstance(c, bool) for c in v
     )
-    if not ok or not np.all(np.isfinite(v)):
-        raise ConfigError(key, f"{v!r} must be [x, y, z] in metres")
+    if not ok or not np.all(np.isfinite(v)) or (geo and not (abs(v[0]) <= 90 and abs(v[1]) <= 180)):
+        raise ConfigError(key, f"{v!r} must be " + ("[lat_deg, lon_deg, alt_m] (WGS-84, |lat| <= 90, "
+                                                    "|lon| <= 180, ellipsoidal height)" if geo else
+                                                    "[x, y, z] in metres"))
     return np.asarray(v, dtype=float)
 
 
-def _radar_base(b: Any, i: int) -> RadarBase:
+def geo_origin(o: Any) -> LocalFrame | None:
+    """Table [radar.origin] (lat, lon deg, alt m ellipsoidal) as a frame; None: flat."""
+    if o is not None and (not isinstance(o, dict) or set(o) != {"lat", "lon", "alt"}):
+        raise ConfigError("radar.origin", "must be a table of exactly lat, lon (deg), alt (m, ellipsoidal)")
+    return None if o is None else LocalFrame(*_point([o["lat"], o["lon"], o["alt"]], "radar.origin", True).tolist())
+
+
+def _site(b: dict[str, Any], k: str, key: str, origin: LocalFrame | None) -> np.ndarray:
+    """Site ``k`` (tx / rx) in local metres: ``k`` as given, or ``k_geo`` through origin."""
+    if (k in b) == (f"{k}_geo" in b):
+        raise ConfigError(f"{key}.{k}", f"give exactly one of {k} (local m) or {k}_geo ([lat, lon, alt])")
+    if k in b:
+        return _point(b[k], f"{key}.{k}")
+    if origin is None:
+        raise ConfigError(f"{key}.{k}_geo", "needs [radar.origin]")
+    return origin.to_enu(*_point(b[f"{k}_geo"], f"{key}.{k}_geo", True))
+
+
+def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     key = f"radar.base[{i}]"
     _check_table(b, key)
-    unknown = set(b) - {"id", "tx", "rx", "channels", "p"}
+    unknown = set(b) - {"id", "tx", "rx", "tx_geo", "rx_geo", "channels", "p"}
     if unknown:
         raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
-    for k in ("id", "tx", "rx", "channels"):
+    for k in ("id", "channels"):
         if k not in b:
             raise ConfigError(f"{key}.{k}", "missing")
     chans = b["channels"]
@@ -296,7 +320,7 @@ def _radar_base(b: Any, i: int) -> RadarBase:
     p = b.get("p", 1)
     if not isinstance(p, int) or isinstance(p, bool) or p < 0:
         raise ConfigError(f"{key}.p", "must be an integer >= 0")
-    tx, rx = _point(b["tx"], f"{key}.tx"), _point(b["rx"], f"{key}.rx")
+    tx, rx = _site(b, "tx", key, origin), _site(b, "rx", key, origin)
     if np.linalg.norm(tx - rx) <= 0:
         raise ConfigError(f"{key}.tx", "transmitter and receiver must differ")
     return RadarBase(_chunk(b["id"], f"{key}.id"), tx, rx, chans, p)

@@ -34,7 +34,7 @@ SECTIONS: dict[str, type] = {
     "sonar.tma.bounds": BoundsParams,
     "sonar.tma.bounds.*": BoundsParams,
 }
-STRUCTURE = ("zenoh", "zenoh.auth", "zenoh.tls", "radar", "sonar", "sim")
+STRUCTURE = ("zenoh", "zenoh.auth", "zenoh.tls", "radar", "radar.origin", "sonar", "sim")
 # Security tables of the deployment (docs/security.md), documented with the parameters.
 SECURITY: dict[str, type] = {"zenoh.auth": AuthConfig, "zenoh.tls": TlsConfig, "[site]": Site}
 
@@ -122,6 +122,14 @@ def markdown() -> str:
         "(docs/scenarios.md). Every table is optional; absent keys take the defaults below.",
         "An unknown table or key, a value of the wrong type, or a number outside its range",
         "(common.deploy.ranges) stops the service with exit code 2 and a message naming the key.",
+        "",
+        "Frame: every site and track is in one local East-North-Up frame, metres (x East,",
+        "y North, z up). `[radar.origin]` (lat, lon in degrees, alt in metres; WGS-84, alt",
+        "an ellipsoidal height, not above mean sea level) places that frame on the Earth: its",
+        "origin, z along the ellipsoid normal there. A base then gives each site either as",
+        "`tx` / `rx` (local metres) or as `tx_geo` / `rx_geo` = [lat_deg, lon_deg, alt_m]",
+        "(same datum), converted to local metres on loading (common.radar.geometry.geodesy);",
+        "`radar/gtracks` then also carries each track's lat, lon, alt (docs/protocol.md).",
         "",
         "Security (docs/security.md): `[zenoh.auth]` and `[zenoh.tls]` below; file paths",
         "are relative to the deployment file's directory. `[[site]]` lists the receiver",

@@ -6,7 +6,9 @@ key. Units: metres, seconds, m/s; angles in the file are degrees (keys ending in
 ``_deg``), everywhere else radians, clockwise from North. docs/scenarios.md lists
 every key.
 
-Motion of the targets and own ship: common.sim.mover.
+Motion of the targets and own ship: common.sim.mover. In a geodetic deployment (one
+with [radar.origin]) a radar target's z is its WGS-84 ellipsoidal height and its
+(x, y) track runs in the tangent plane (common.sim.simulator lifts it to that height).
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from common.deploy.config import Config, ConfigError
+from common.deploy.config import Config, ConfigError, geo_origin
+from common.radar.geometry.geodesy import LocalFrame
 from common.sim.mover import Leg, Mover
 
 MODES = ("broadband", "narrowband")
@@ -89,12 +92,14 @@ class SonarSim:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A parsed ``[sim]`` section: horizon, and optional radar and sonar parts."""
+    """A parsed ``[sim]`` section: horizon, and optional radar and sonar parts; origin
+    is the file's [radar.origin] (None: a flat deployment)."""
 
     duration: float
     radar: RadarSim | None = None
     sonar: SonarSim | None = None
     name: str = ""
+    origin: LocalFrame | None = None
 
 
 # ---------------------------------------------------------------- parsing helpers
@@ -339,7 +344,9 @@ def load_scenario(doc: dict[str, Any]) -> Scenario:
     sonar = _sonar(s["sonar"], period) if "sonar" in s else None
     if radar is None and sonar is None:
         raise ConfigError(key, "needs [sim.radar] and/or [sim.sonar]")
-    return Scenario(duration, radar, sonar, name)
+    radar_doc = doc.get("radar")
+    origin = geo_origin(radar_doc.get("origin") if isinstance(radar_doc, dict) else None)
+    return Scenario(duration, radar, sonar, name, origin)
 
 
 def radar_scene(cfg: Config) -> RadarSim | None:

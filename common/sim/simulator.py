@@ -8,6 +8,11 @@ t of scenario time (the sorted union of the radar and sonar scan times in
 - ``sim/truth/sonar`` (one per array) and ``sonar/detections/<array>`` at sonar
   scan times.
 
+In a geodetic deployment (scn.origin set) a radar target's mover runs in the tangent
+plane with z its ellipsoidal height; each position is re-projected along the vertical to
+that height (common.radar.geometry.geodesy.LocalFrame.lift_motion), the velocity is the
+derivative of that path, and both the truth and the plots use the ENU result.
+
 Each key draws from its own numpy Generator seeded by ``[seed, crc32(key)]``, so a run
 is reproducible for a seed and adding a base does not change another base's plots.
 """
@@ -76,6 +81,8 @@ def run_scenario(
         _check_ids(set(radar.channels), {c for b in bases for c in b.channels}, "sim.radar.channel")
         tr = scan_times(scn.duration, radar.scan_period)
         rp, rv, ra, rid = _truth(radar.targets, tr)
+        if scn.origin is not None:  # [x, y, ellipsoidal height] -> ENU (docstring)
+            rp, rv = scn.origin.lift_motion(rp, rv)
         for k, t in enumerate(tr):
             steps.setdefault(round(float(t), 9), []).append(("radar", k))
     if sonar is not None:

@@ -39,7 +39,8 @@ class Field:
 
     kind: float | int | str | bool | floats | ints | strs | map | maps | pairs.
     ``column`` groups list fields that must have equal lengths; ``length`` fixes the
-    length of a list; ``sub`` is the schema of a nested map (map / maps).
+    length of a list; ``sub`` is the schema of a nested map (map / maps); ``interval``
+    bounds numbers (closed); optional fields of one ``together`` group come all or none.
     """
 
     kind: str
@@ -51,6 +52,8 @@ class Field:
     length: int | None = None
     choices: tuple[str, ...] | None = None
     sub: dict[str, "Field"] | None = None
+    interval: tuple[float, float] | None = None
+    together: str | None = None
 
 
 def _col(kind: str = "floats", **kw: Any) -> Field:
@@ -93,6 +96,10 @@ GTRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
     "x": Field("floats", length=6), "P": Field("floats", length=36),
     "score": Field("float"), "etracks": Field("pairs"), "ambiguous": Field("bool"),
+    # geodetic deployments only: WGS-84 position of x (deg, deg, m ellipsoidal height)
+    "lat": Field("float", optional=True, interval=(-90.0, 90.0), together="geo"),
+    "lon": Field("float", optional=True, interval=(-180.0, 180.0), together="geo"),
+    "alt": Field("float", optional=True, together="geo"),
 }
 GTRACKS = {"v": V, "t": T, "tracks": Field("maps", sub=GTRACK)}
 DETECTIONS = {
@@ -250,6 +257,11 @@ def validate(schema: dict[str, Field], obj: Any, path: str) -> dict[str, Any]:
                 raise DecodeError(where, f"length {n} differs from {other} length {m}")
             lengths.setdefault(f.column, (where, n))
         out[name] = value
+    for name, f in schema.items():
+        if f.together is not None and name not in out:
+            given = [n for n, g in schema.items() if g.together == f.together and n in out]
+            if given:
+                raise DecodeError(f"{path}.{name}" if path else name, f"missing (given: {given[0]})")
     return out
 
 
@@ -270,6 +282,8 @@ def _range(f: Field, a: np.ndarray, where: str) -> None:
         raise DecodeError(where, "must be >= 0")
     if f.angle and np.any((a < 0) | (a > TWO_PI)):
         raise DecodeError(where, "angle must be in [0, 2pi] radians")
+    if f.interval is not None and np.any((a < f.interval[0]) | (a > f.interval[1])):
+        raise DecodeError(where, f"must be in [{f.interval[0]}, {f.interval[1]}]")
 
 
 def _check(f: Field, v: Any, where: str) -> Any:

@@ -42,6 +42,7 @@ class RadarChain:
         self.plotters = {b.id: PlotFusion(b.channels, b.p, plotter) for b in cfg.bases}
         self.trackers = {b.id: ElementaryTracker(tracker, crossing) for b in cfg.bases}
         self.fusion = global_fusion(cfg)
+        self.origin = cfg.origin
 
     def step(self, messages: Iterable[tuple[str, dict[str, Any]]]) -> list[dict[str, Any]]:
         """Feed one scan's simulator messages (key suffix, message); `radar/plots/...`
@@ -53,5 +54,5 @@ class RadarChain:
             base = msg["base"]
             for t, fused in self.plotters[base].push(msg["channel"], msg["t"], plots_of(msg)):
                 tracks = self.trackers[base].step(t, fused)
-                out += [gtracks_message(g) for g in self.fusion.push(base, tracks)]
+                out += [gtracks_message(g, self.origin) for g in self.fusion.push(base, tracks)]
         return out

@@ -83,7 +83,7 @@ def main(args: argparse.Namespace) -> int:
         stale = frozenset(b for b, h in heard.items() if now - h > params.max_wait) | ahead
         for out in core.push(base, tracks, stale):
             svc.last_t = out.t
-            svc.publish("radar/gtracks", gtracks_message(out))
+            svc.publish("radar/gtracks", gtracks_message(out, cfg.origin))
 
     svc.subscribe("radar/etracks/*", on_etracks)
     return svc.run()

@@ -12,6 +12,7 @@ import pytest
 from common.core.track_table import Status
 from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.report import GlobalTracks
+from common.radar.geometry.geodesy import LocalFrame
 from common.wire import protocol
 from common.wire.radar_messages import etracks_from, etracks_message, etracks_of, gtracks_message
 
@@ -93,3 +94,47 @@ def test_gtracks_message_is_valid_and_names_the_contributing_bases() -> None:
     assert [tr["status"] for tr in msg["tracks"]] == ["confirmed", "coasting"]
     assert msg["tracks"][0]["etracks"] == [("b1", 7), ("b3", 2)] and msg["tracks"][1]["etracks"] == []
     np.testing.assert_array_equal(msg["tracks"][1]["x"], np.arange(6.0, 12.0))
+
+
+def _gtracks(x: np.ndarray) -> GlobalTracks:
+    n = len(x)
+    return GlobalTracks(t=1.0, bases=("b1",), id=np.arange(n), status=np.full(n, Status.CONFIRMED),
+                        x=x, P=np.tile(np.eye(6), (n, 1, 1)), score=np.zeros(n),
+                        member=np.zeros((n, 1), dtype=np.int64), has=np.ones((n, 1), dtype=bool),
+                        ambiguous=np.zeros(n, dtype=bool))
+
+
+def test_gtracks_carry_lat_lon_alt_in_a_geodetic_deployment_only() -> None:
+    frame = LocalFrame(47.0, 8.0, 450.0)
+    x = np.array([[0.0, 0, 0, 0, 0, 0], [-50e3, 200.0, 90e3, -60.0, 9200.0, 0.0]])
+    flat = protocol.decode("gtracks", protocol.encode(gtracks_message(_gtracks(x))))
+    assert not {"lat", "lon", "alt"} & set(flat["tracks"][1])
+    geo = protocol.decode("gtracks", protocol.encode(gtracks_message(_gtracks(x), frame)))
+    t0, t1 = geo["tracks"]
+    assert (t0["lat"], t0["lon"]) == pytest.approx((47.0, 8.0)) and t0["alt"] == pytest.approx(450.0)
+    assert frame.to_enu(t1["lat"], t1["lon"], t1["alt"]) == pytest.approx([-50e3, 90e3, 9200.0], abs=1e-6)
+    assert t1["alt"] > 450.0 + 9200.0 + 700.0  # 103 km out, the tangent plane is ~830 m up
+    assert gtracks_message(_gtracks(np.zeros((0, 6))), frame)["tracks"] == []
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"lat": 90.5}, "tracks[0].lat"),
+    ({"lon": -180.5}, "tracks[0].lon"),
+    ({"alt": float("nan")}, "tracks[0].alt"),
+    ({"lat": "47"}, "tracks[0].lat"),
+])
+def test_gtracks_decoder_checks_lat_lon_alt(change: dict[str, object], field: str) -> None:
+    msg = gtracks_message(_gtracks(np.zeros((1, 6))), LocalFrame(47.0, 8.0, 450.0))
+    msg["tracks"][0].update(change)
+    with pytest.raises(protocol.DecodeError) as e:
+        protocol.decode("gtracks", protocol.encode(msg))
+    assert e.value.field == field
+
+
+@pytest.mark.parametrize("drop", ["lat", "lon", "alt"])
+def test_gtracks_lat_lon_alt_come_together(drop: str) -> None:
+    msg = gtracks_message(_gtracks(np.zeros((1, 6))), LocalFrame(47.0, 8.0, 450.0))
+    del msg["tracks"][0][drop]
+    with pytest.raises(protocol.DecodeError, match="missing") as e:
+        protocol.decode("gtracks", protocol.encode(msg))
+    assert e.value.field == f"tracks[0].{drop}"
