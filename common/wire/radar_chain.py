@@ -5,7 +5,10 @@ shells around the same cores and build their messages with common.wire.radar_mes
 chain run here gives what the processes publish for the same input (given the same
 per-scan grouping; tests/integration/test_global_integration.py compares the two). Used for Monte Carlo
 studies (many seeds in seconds), benchmarks and the consistency tests of the global
-covariance. No I/O, no clock.
+covariance. No I/O, no clock: global fusion's arrival rule (common.radar.fusion.arrival)
+takes each report's message time as its wall time, a real-time run without latency. Every
+base reports every scan, so with scans shorter than `max_wait` no base goes stale and no
+report is rejected: the rule changes nothing here.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from typing import Any
 from common.core.crossing import CrossingParams
 from common.deploy.config import Config, section
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
+from common.radar.fusion.arrival import Arrival
 from common.radar.fusion.cycle import GlobalFusion
 from common.radar.fusion.params import FusionParams
 from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
@@ -43,6 +47,7 @@ class RadarChain:
         self.trackers = {b.id: ElementaryTracker(tracker, crossing) for b in cfg.bases}
         self.fusion = global_fusion(cfg)
         self.origin = cfg.origin
+        self.arrival = Arrival(self.fusion)
 
     def step(self, messages: Iterable[tuple[str, dict[str, Any]]]) -> list[dict[str, Any]]:
         """Feed one scan's simulator messages (key suffix, message); `radar/plots/...`
@@ -54,5 +59,5 @@ class RadarChain:
             base = msg["base"]
             for t, fused in self.plotters[base].push(msg["channel"], msg["t"], plots_of(msg)):
                 tracks = self.trackers[base].step(t, fused)
-                out += [gtracks_message(g, self.origin) for g in self.fusion.push(base, tracks)]
+                out += [gtracks_message(g, self.origin) for g in self.arrival.push(base, tracks, t)]
         return out

@@ -5,10 +5,10 @@
 the cycles it completed (common.radar.fusion.report.GlobalTracks); the wire messages are
 parsed and built once, at the service (common.wire.radar_messages). A cycle at time t runs
 when every base that is not `stale` has reported t or a later time; stale bases (the
-caller's judgement, e.g. silent for some seconds of wall time: the service decides, the
-core has no clock) are treated as not reporting in that cycle (their memberships are kept,
-without measurement). Within a cycle the bases are processed in configured order, so the
-output depends neither on the arrival order of one cycle's messages nor on how the bases'
+judgement of common.radar.fusion.arrival, given wall time: this core has no clock) are
+treated as not reporting in that cycle (their memberships are kept, without
+measurement). Within a cycle the bases are processed in configured order, so the output
+depends neither on the arrival order of one cycle's messages nor on how the bases'
 streams interleave, as long as no base is declared stale.
 
 Deviation (stated): 001's rule "every base reported t, or any base reported a later

@@ -1,5 +1,6 @@
 """Parameters of table `[radar.fusion]`: the global fusion of common.radar.fusion.cycle
-(001 modules 61-65) and its initialisation (module 62, common.radar.fusion.initiation)."""
+(001 modules 61-65), its initialisation (module 62, common.radar.fusion.initiation) and
+its arrival rule (common.radar.fusion.arrival)."""
 
 from __future__ import annotations
 
@@ -40,11 +41,12 @@ class FusionParams(InitParams):
     max_coast: deletion after this many cycles without contributors (module 61).
     coast_cycles: a confirmed track none of whose contributors was updated for this
         many cycles is reported coasting (common.radar.fusion.status).
-    max_wait: seconds of wall time without a message after which the service declares
-        a base stale (module doc; used by services/global_fusion, not by the core).
-    max_lead: seconds of message time after the latest cycle beyond which the service
+    max_wait: seconds of wall time without a message after which global fusion declares
+        a base stale (common.radar.fusion.arrival, the arrival rule).
+    max_lead: seconds of message time after the latest cycle beyond which global fusion
         rejects a message and declares its base stale (a clock jumped forward; above
-        the lag between bases of a fast replay, module doc: 29 scans measured).
+        the lag between bases of a fast replay, common.radar.fusion.cycle: 29 scans
+        measured).
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
     eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
         measurement against the elementary track's prediction (common.radar.fusion.decorrelation).
