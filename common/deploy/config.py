@@ -20,7 +20,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from common.deploy.ranges import out_of_range
+from common.core.params import ParamError
 
 # A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
 # whitespace and control characters (ids go into command lines and credential files).
@@ -182,23 +182,44 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
     return Config(zc, bases, arrays, doc, path, sites)
 
 
-def section(cfg: Config, dotted: str, cls: type[T]) -> T:
-    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent).
+def tables(doc: dict[str, Any], prefix: str = "") -> dict[str, dict[str, Any]]:
+    """Every table of ``doc`` at every depth by dotted name (the one walker of the
+    nested tables of a deployment file)."""
+    out: dict[str, dict[str, Any]] = {}
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            out[prefix + k] = v
+            out.update(tables(v, f"{prefix}{k}."))
+    return out
+
+
+def table(doc: dict[str, Any], dotted: str) -> dict[str, Any]:
+    """Table ``dotted`` of ``doc``, {} when absent; ConfigError when a part of the path
+    is a value, not a table."""
+    found = tables(doc)
+    parts = dotted.split(".")
+    for i in range(1, len(parts) + 1):
+        name, parent = ".".join(parts[:i]), ".".join(parts[:i - 1])
+        if name not in found:
+            if parts[i - 1] in (found[parent] if parent else doc):
+                raise ConfigError(dotted, "expected a table")
+            return {}
+    return found[dotted]
+
+
+def section(cfg: Config, dotted: str, cls: type[T], given: dict[str, Any] | None = None) -> T:
+    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent), or
+    from the keys ``given`` for it.
 
     Nested tables are sections of their own (common.deploy.sections checks their names).
-    Values outside their declared interval (common.deploy.ranges) are rejected."""
-    table: Any = cfg.doc
-    for part in dotted.split("."):
-        table = table.get(part, {}) if isinstance(table, dict) else None
-        if table is None:
-            raise ConfigError(dotted, "expected a table")
-    _check_table(table, dotted)
-    given = {k: v for k, v in table.items() if not isinstance(v, dict)}
-    obj = _build(cls, given, dotted)
-    bad = out_of_range(dotted, {k: getattr(obj, k) for k in given})
-    if bad is not None:
-        raise ConfigError(f"{dotted}.{bad[0]}", bad[1])
-    return obj
+    A value outside its range or a broken rule between keys (the class's RANGES and
+    RULES, common.core.params) is a ConfigError naming the keys and the table."""
+    if given is None:
+        given = {k: v for k, v in table(cfg.doc, dotted).items() if not isinstance(v, dict)}
+    try:
+        return _build(cls, given, dotted)
+    except ParamError as e:
+        raise ConfigError(f"{dotted}.{e.keys[0]}", f"[{dotted}] {e.detail}") from None
 
 
 def _endpoint(ep: Any, key: str) -> str:
