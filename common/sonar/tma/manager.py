@@ -37,7 +37,7 @@ VERSION = 1
 class TmaParams(Params):
     """``[sonar.tma]``: decimation and buffering of the TMA service.
 
-    cycle_dt: message-time seconds between two TMA cycles of a track.
+    cycle_dt: message-time seconds between two TMA cycles of a track (0: every btracks cycle).
     sample_dt: minimum spacing (s) of the bearings kept for TMA (0: keep all).
     own_keep: own-ship positions kept for matching btracks by time.
     max_pending: btracks messages that may wait for their own-ship position.
@@ -49,7 +49,7 @@ class TmaParams(Params):
     max_pending: int = 8
 
     RANGES: ClassVar[dict[str, Range]] = {
-        "cycle_dt": positive("s"), "sample_dt": non_negative("s"),
+        "cycle_dt": non_negative("s"), "sample_dt": non_negative("s"),
         "own_keep": count(1), "max_pending": count(0),
     }
 
