@@ -58,20 +58,21 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from common.core.angles import wrap_pi
+from common.core.params import PROB_OPEN, Params, Range, non_negative, positive
 
 DENSITY_CUTOFF = 1e-12  # g terms below this fraction of their peak g_j(0) are dropped
 CUTOFF_RADIUS = float(np.sqrt(-2.0 * np.log(DENSITY_CUTOFF)))  # Mahalanobis 7.43
 
 
 @dataclass(frozen=True)
-class CrossingParams:
+class CrossingParams(Params):
     """Parameters of seed 004 crossing management.
 
     method: ambiguity test, "eq13" (004 eq. 13) or "supnorm" (sup-norm threshold S).
@@ -94,6 +95,12 @@ class CrossingParams:
     q_prior: float = 0.5
     q_prior_weight: float = 2.0
     q_max: float = 0.95
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "S": positive("sigma"), "epsilon": positive(), "volume": positive("units of z^m"),
+        "max_duration": positive("s"), "q_prior": PROB_OPEN,
+        "q_prior_weight": non_negative("pseudo-counts"), "q_max": PROB_OPEN,
+    }
 
 
 def _broadcast_cov(cov: ArrayLike, n: int, m: int) -> np.ndarray:

@@ -20,7 +20,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from common.deploy.ranges import out_of_range
+from common.core.params import ParamError
+from common.deploy.errors import ConfigError
+from common.deploy.positions import geo_origin, site_position
 from common.radar.geometry.geodesy import LocalFrame
 
 # A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
@@ -29,14 +31,6 @@ KEY_CHUNK = re.compile(r"^(?!@)[^/*$?#\s\x00-\x1f\x7f]+$")
 ARRAY_KINDS = ("cylindrical", "linear")
 
 T = TypeVar("T")
-
-
-class ConfigError(ValueError):
-    """An invalid configuration; the message names the offending key."""
-
-    def __init__(self, key: str, reason: str) -> None:
-        super().__init__(f"config key '{key}': {reason}")
-        self.key = key
 
 
 @dataclass(frozen=True)
@@ -186,23 +180,44 @@ def parse(doc: dict[str, Any], path: Path | None = None) -> Config:
     return Config(zc, bases, arrays, doc, path, sites, origin)
 
 
-def section(cfg: Config, dotted: str, cls: type[T]) -> T:
-    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent).
+def tables(doc: dict[str, Any], prefix: str = "") -> dict[str, dict[str, Any]]:
+    """Every table of ``doc`` at every depth by dotted name (the one walker of the
+    nested tables of a deployment file)."""
+    out: dict[str, dict[str, Any]] = {}
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            out[prefix + k] = v
+            out.update(tables(v, f"{prefix}{k}."))
+    return out
+
+
+def table(doc: dict[str, Any], dotted: str) -> dict[str, Any]:
+    """Table ``dotted`` of ``doc``, {} when absent; ConfigError when a part of the path
+    is a value, not a table."""
+    found = tables(doc)
+    parts = dotted.split(".")
+    for i in range(1, len(parts) + 1):
+        name, parent = ".".join(parts[:i]), ".".join(parts[:i - 1])
+        if name not in found:
+            if parts[i - 1] in (found[parent] if parent else doc):
+                raise ConfigError(dotted, "expected a table")
+            return {}
+    return found[dotted]
+
+
+def section(cfg: Config, dotted: str, cls: type[T], given: dict[str, Any] | None = None) -> T:
+    """Build parameter dataclass ``cls`` from table ``dotted`` (defaults where absent), or
+    from the keys ``given`` for it.
 
     Nested tables are sections of their own (common.deploy.sections checks their names).
-    Values outside their declared interval (common.deploy.ranges) are rejected."""
-    table: Any = cfg.doc
-    for part in dotted.split("."):
-        table = table.get(part, {}) if isinstance(table, dict) else None
-        if table is None:
-            raise ConfigError(dotted, "expected a table")
-    _check_table(table, dotted)
-    given = {k: v for k, v in table.items() if not isinstance(v, dict)}
-    obj = _build(cls, given, dotted)
-    bad = out_of_range(dotted, {k: getattr(obj, k) for k in given})
-    if bad is not None:
-        raise ConfigError(f"{dotted}.{bad[0]}", bad[1])
-    return obj
+    A value outside its range or a broken rule between keys (the class's RANGES and
+    RULES, common.core.params) is a ConfigError naming the keys and the table."""
+    if given is None:
+        given = {k: v for k, v in table(cfg.doc, dotted).items() if not isinstance(v, dict)}
+    try:
+        return _build(cls, given, dotted)
+    except ParamError as e:
+        raise ConfigError(f"{dotted}.{e.keys[0]}", f"[{dotted}] {e.detail}") from None
 
 
 def _endpoint(ep: Any, key: str) -> str:
@@ -274,35 +289,6 @@ def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
     return sites
 
 
-def _point(v: Any, key: str, geo: bool = False) -> np.ndarray:
-    ok = isinstance(v, list) and len(v) == 3 and all(
-        isinstance(c, (int, float)) and not isinstance(c, bool) for c in v
-    )
-    if not ok or not np.all(np.isfinite(v)) or (geo and not (abs(v[0]) <= 90 and abs(v[1]) <= 180)):
-        raise ConfigError(key, f"{v!r} must be " + ("[lat_deg, lon_deg, alt_m] (WGS-84, |lat| <= 90, "
-                                                    "|lon| <= 180, ellipsoidal height)" if geo else
-                                                    "[x, y, z] in metres"))
-    return np.asarray(v, dtype=float)
-
-
-def geo_origin(o: Any) -> LocalFrame | None:
-    """Table [radar.origin] (lat, lon deg, alt m ellipsoidal) as a frame; None: flat."""
-    if o is not None and (not isinstance(o, dict) or set(o) != {"lat", "lon", "alt"}):
-        raise ConfigError("radar.origin", "must be a table of exactly lat, lon (deg), alt (m, ellipsoidal)")
-    return None if o is None else LocalFrame(*_point([o["lat"], o["lon"], o["alt"]], "radar.origin", True).tolist())
-
-
-def _site(b: dict[str, Any], k: str, key: str, origin: LocalFrame | None) -> np.ndarray:
-    """Site ``k`` (tx / rx) in local metres: ``k`` as given, or ``k_geo`` through origin."""
-    if (k in b) == (f"{k}_geo" in b):
-        raise ConfigError(f"{key}.{k}", f"give exactly one of {k} (local m) or {k}_geo ([lat, lon, alt])")
-    if k in b:
-        return _point(b[k], f"{key}.{k}")
-    if origin is None:
-        raise ConfigError(f"{key}.{k}_geo", "needs [radar.origin]")
-    return origin.to_enu(*_point(b[f"{k}_geo"], f"{key}.{k}_geo", True))
-
-
 def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     key = f"radar.base[{i}]"
     _check_table(b, key)
@@ -320,7 +306,7 @@ def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     p = b.get("p", 1)
     if not isinstance(p, int) or isinstance(p, bool) or p < 0:
         raise ConfigError(f"{key}.p", "must be an integer >= 0")
-    tx, rx = _site(b, "tx", key, origin), _site(b, "rx", key, origin)
+    tx, rx = site_position(b, "tx", key, origin), site_position(b, "rx", key, origin)
     if np.linalg.norm(tx - rx) <= 0:
         raise ConfigError(f"{key}.tx", "transmitter and receiver must differ")
     return RadarBase(_chunk(b["id"], f"{key}.id"), tx, rx, chans, p)

@@ -10,8 +10,8 @@ import typing
 from typing import Any
 
 from common.core.crossing import CrossingParams
-from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section
-from common.deploy.ranges import ranges_of
+from common.core.params import Params
+from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section, table, tables
 from common.radar.elementary.tracker import ElementaryParams, RadarCrossingParams
 from common.radar.fusion.params import FusionParams
 from common.radar.plots.channel_fusion import PlotterParams
@@ -43,29 +43,28 @@ def check_tables(cfg: Config) -> None:
     """Raise ConfigError for a table that is neither structure nor a known section
     (a misspelt ``[radar.trackr]`` must not be ignored silently)."""
     known = (*STRUCTURE, *SECTIONS)
-    for dotted in _tables(cfg.doc, ""):
-        if not any(fnmatch.fnmatchcase(dotted, k) for k in known):
+    for dotted in tables(cfg.doc):
+        if not dotted.startswith("sim.") and not any(fnmatch.fnmatchcase(dotted, k) for k in known):
             raise ConfigError(dotted, f"unknown table (known: {', '.join(sorted(SECTIONS))})")
 
 
 def check_all(cfg: Config) -> None:
-    """Validate the whole file at start-up: tables, then every parameter section."""
+    """Validate the whole file at start-up: tables, then every parameter section (the
+    bounds of each array as that array's TMA reads them). [sim] is the simulator's."""
     check_tables(cfg)
     for name, cls in SECTIONS.items():
         if "*" not in name:
             section(cfg, name, cls)
-
-
-def _tables(doc: dict[str, Any], prefix: str) -> list[str]:
-    """Dotted names of the (nested) tables of ``doc``; [sim] is the simulator's own."""
-    out = []
-    for k, v in doc.items():
-        dotted = f"{prefix}{k}"
+    for k, v in table(cfg.doc, "sonar.tma.bounds").items():
         if isinstance(v, dict):
-            out.append(dotted)
-            if dotted != "sim":
-                out += _tables(v, dotted + ".")
-    return out
+            array_bounds(cfg, k)
+
+
+def array_bounds(cfg: Config, array: str) -> BoundsParams:
+    """[sonar.tma.bounds] overridden key by key by [sonar.tma.bounds.<array>]."""
+    merged = {**table(cfg.doc, "sonar.tma.bounds"), **table(cfg.doc, f"sonar.tma.bounds.{array}")}
+    return section(cfg, f"sonar.tma.bounds.{array}", BoundsParams,
+                   {k: v for k, v in merged.items() if not isinstance(v, dict)})
 
 
 def _meanings(cls: type) -> dict[str, str]:
@@ -120,8 +119,10 @@ def markdown() -> str:
         "file also has `[zenoh]` (connect, listen, root), `[[radar.base]]` (id, tx, rx,",
         "channels, p), `[[sonar.array]]` (id, kind, sigma0) and, for the simulator, `[sim]`",
         "(docs/scenarios.md). Every table is optional; absent keys take the defaults below.",
-        "An unknown table or key, a value of the wrong type, or a number outside its range",
-        "(common.deploy.ranges) stops the service with exit code 2 and a message naming the key.",
+        "An unknown table or key, a value of the wrong type, a number outside its range or a",
+        "broken rule between keys (declared beside the fields: RANGES and RULES of each class,",
+        "common.core.params) stops the service with exit code 2 and a message naming the keys;",
+        "building the class in Python checks the same. Rules of a table follow its keys.",
         "",
         "Frame: every site and track is in one local East-North-Up frame, metres (x East,",
         "y North, z up). `[radar.origin]` (lat, lon in degrees, alt in metres; WGS-84, alt",
@@ -140,13 +141,16 @@ def markdown() -> str:
     for name, cls in {**SECURITY, **SECTIONS}.items():
         meanings = _meanings(cls)
         hints = typing.get_type_hints(cls)
-        ranges = ranges_of(name)
+        ranges = cls.RANGES if issubclass(cls, Params) else {}
         lines += ["", f"## [{name}]", "", (cls.__doc__ or "").strip().splitlines()[0], "",
                   "| key | type | default | unit | range | meaning |",
                   "| --- | --- | --- | --- | --- | --- |"]
         for f in dataclasses.fields(cls):
             r = ranges.get(f.name)
-            unit, interval = (r.unit, str(r)) if r is not None else ("", "")
+            unit, interval = (r.unit, f"{r} ({r.note})" if r.note else str(r)) if r is not None else ("", "")
             lines.append(f"| {f.name} | {_type_name(hints[f.name])} | {_default(f)} | {unit} | "
                          f"{interval} | {_describe(f.name, meanings)} |")
+        rules = cls.RULES if issubclass(cls, Params) else ()
+        if rules:
+            lines += ["", "Rules: " + "; ".join(r.text for r in rules) + "."]
     return "\n".join(lines) + "\n"

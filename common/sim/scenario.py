@@ -15,19 +15,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
-from common.deploy.config import Config, ConfigError, geo_origin
+from common.core.params import ParamError, Params, Range, Rule, ascending_pair, non_negative, positive, unbounded
+from common.deploy.config import Config, ConfigError
+from common.deploy.positions import geo_origin
 from common.radar.geometry.geodesy import LocalFrame
 from common.sim.mover import Leg, Mover
 
 MODES = ("broadband", "narrowband")
+PD = Range("probability", 0.0, 1.0)
+CLUTTER = Range("mean count per scan", 0.0, 1e4)
+DB = "any level in dB"
+P = TypeVar("P", bound=Params)
 
 
 @dataclass(frozen=True)
-class RadarChannelSim:
+class RadarChannelSim(Params):
     """Per-channel radar sensor model: pd, clutter mean, sigmas, reference SNR."""
 
     pd: float = 0.9
@@ -36,6 +42,11 @@ class RadarChannelSim:
     svb: float = 2.0
     saz: float = math.radians(1.5)
     snr_db: float = 15.0
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "pd": PD, "clutter": CLUTTER, "srb": positive("m"), "svb": positive("m/s"),
+        "saz": Range("rad", 0.0, math.pi, "(]"), "snr_db": unbounded("dB", DB),
+    }
 
 
 @dataclass(frozen=True)
@@ -58,7 +69,7 @@ class RadarSim:
 
 
 @dataclass(frozen=True)
-class SonarArraySim:
+class SonarArraySim(Params):
     """Per-array sonar sensor model (array kind and sigma0 come from the deployment)."""
 
     mode: str = "broadband"
@@ -72,6 +83,14 @@ class SonarArraySim:
     endfire_deg: float = 10.0
     sfreq_hz: float = 0.05
     band_hz: tuple[float, float] = (10.0, 1000.0)
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "pd": PD, "clutter": CLUTTER, "di_db": unbounded("dB", DB), "nl_db": unbounded("dB", DB),
+        "snr_threshold_db": unbounded("dB", DB), "sigma_amp_db": non_negative("dB"),
+        "clutter_snr_db": positive("dB"), "endfire_deg": Range("deg", 0.0, 90.0, "(]"),
+        "sfreq_hz": positive("Hz"), "band_hz": positive("Hz"),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (ascending_pair("band_hz"),)
 
 
 @dataclass(frozen=True)
@@ -210,13 +229,23 @@ def _mover(t: Any, key: str, allowed: set[str], dims: tuple[int, ...]) -> tuple[
 _RCH_KEYS = {"pd", "clutter", "srb", "svb", "saz_deg", "snr_db"}
 
 
+def _checked(cls: type[P], key: str, **values: Any) -> P:
+    """``cls(**values)``, a ParamError as a ConfigError naming the file's key."""
+    try:
+        return cls(**values)
+    except ParamError as e:
+        name = "saz_deg" if e.keys[0] == "saz" else e.keys[0]
+        raise ConfigError(f"{key}.{name}", f"[{key}] {e.detail}") from None
+
+
 def _radar_channel(t: dict[str, Any], key: str, base: RadarChannelSim) -> RadarChannelSim:
-    return RadarChannelSim(
-        pd=_num(t, "pd", key, base.pd, 0.0, 1.0),
-        clutter=_num(t, "clutter", key, base.clutter, 0.0, 1e4),
-        srb=_num(t, "srb", key, base.srb, 0.0, lo_open=True),
-        svb=_num(t, "svb", key, base.svb, 0.0, lo_open=True),
-        saz=math.radians(_num(t, "saz_deg", key, math.degrees(base.saz), 0.0, 180.0, lo_open=True)),
+    return _checked(
+        RadarChannelSim, key,
+        pd=_num(t, "pd", key, base.pd),
+        clutter=_num(t, "clutter", key, base.clutter),
+        srb=_num(t, "srb", key, base.srb),
+        svb=_num(t, "svb", key, base.svb),
+        saz=math.radians(_num(t, "saz_deg", key, math.degrees(base.saz))),
         snr_db=_num(t, "snr_db", key, base.snr_db),
     )
 
@@ -272,20 +301,19 @@ def _sonar_array(t: dict[str, Any], key: str, base: SonarArraySim) -> SonarArray
     band = base.band_hz
     if "band_hz" in t:
         b = _vec(t, "band_hz", key, (2,))
-        if not 0 < b[0] < b[1]:
-            raise ConfigError(f"{key}.band_hz", "must be [f_lo, f_hi] with 0 < f_lo < f_hi")
         band = (float(b[0]), float(b[1]))
-    return SonarArraySim(
+    return _checked(
+        SonarArraySim, key,
         mode=mode,
-        pd=_num(t, "pd", key, base.pd, 0.0, 1.0),
-        clutter=_num(t, "clutter", key, base.clutter, 0.0, 1e4),
+        pd=_num(t, "pd", key, base.pd),
+        clutter=_num(t, "clutter", key, base.clutter),
         di_db=_num(t, "di_db", key, base.di_db),
         nl_db=_num(t, "nl_db", key, base.nl_db),
         snr_threshold_db=_num(t, "snr_threshold_db", key, base.snr_threshold_db),
-        sigma_amp_db=_num(t, "sigma_amp_db", key, base.sigma_amp_db, 0.0),
-        clutter_snr_db=_num(t, "clutter_snr_db", key, base.clutter_snr_db, 0.0, lo_open=True),
-        endfire_deg=_num(t, "endfire_deg", key, base.endfire_deg, 0.0, 90.0, lo_open=True),
-        sfreq_hz=_num(t, "sfreq_hz", key, base.sfreq_hz, 0.0, lo_open=True),
+        sigma_amp_db=_num(t, "sigma_amp_db", key, base.sigma_amp_db),
+        clutter_snr_db=_num(t, "clutter_snr_db", key, base.clutter_snr_db),
+        endfire_deg=_num(t, "endfire_deg", key, base.endfire_deg),
+        sfreq_hz=_num(t, "sfreq_hz", key, base.sfreq_hz),
         band_hz=band,
     )
 

@@ -15,16 +15,16 @@ Configuration: [sonar.tma] (TmaParams), [sonar.tma.ctma] (CtmaParams), [sonar.tm
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 from typing import Any
 
 from common.bus.service import Service
 from common.cli import add_common, load_config
 from common.core.rejection import Rejected
-from common.deploy.config import Config, ConfigError, section
+from common.deploy.config import Config, ConfigError, section, table
+from common.deploy.sections import array_bounds
 from common.sonar.tma.bounds import Bounds
 from common.sonar.tma.constrained import CtmaParams
-from common.sonar.tma.manager import BOUNDS_FIELDS, BoundsParams, SupportParams, TmaManager, TmaParams, make_bounds
+from common.sonar.tma.manager import BOUNDS_FIELDS, SupportParams, TmaManager, TmaParams, make_bounds
 from common.wire import protocol
 
 HISTORY_TIMEOUT_S = 2.0
@@ -36,40 +36,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--array", required=True, help="sonar array id of the deployment")
 
 
-def _table(doc: dict[str, Any], dotted: str) -> dict[str, Any]:
-    for part in dotted.split("."):
-        doc = doc.get(part, {})
-        if not isinstance(doc, dict):
-            raise ConfigError(dotted, "expected a table")
-    return doc
-
-
-def _leaf_section(cfg: Config, dotted: str, table: dict[str, Any], cls: type) -> Any:
-    """section() of ``table`` placed at ``dotted`` (its sub-tables read separately)."""
-    doc: dict[str, Any] = {k: v for k, v in table.items() if not isinstance(v, dict)}
-    for part in reversed(dotted.split(".")):
-        doc = {part: doc}
-    return section(replace(cfg, doc=doc), dotted, cls)
-
-
 def tma_config(cfg: Config, array: str) -> tuple[TmaParams, CtmaParams, Bounds, SupportParams]:
     """The TMA parameters, core config, initial bounds and support values of ``array``."""
-    tma = _table(cfg.doc, "sonar.tma")
+    tma = table(cfg.doc, "sonar.tma")
     extra = sorted(k for k, v in tma.items() if isinstance(v, dict) and k not in SUBTABLES)
     if extra:
         raise ConfigError(f"sonar.tma.{extra[0]}", f"unknown table (known: {', '.join(SUBTABLES)})")
-    params = _leaf_section(cfg, "sonar.tma", tma, TmaParams)
+    params = section(cfg, "sonar.tma", TmaParams)
     core = section(cfg, "sonar.tma.ctma", CtmaParams)
-    bounds = _table(cfg.doc, "sonar.tma.bounds")
     known = {a.id for a in cfg.arrays}
-    for k, v in bounds.items():
+    for k, v in table(cfg.doc, "sonar.tma.bounds").items():
         if isinstance(v, dict) and k not in known:
             raise ConfigError(f"sonar.tma.bounds.{k}", "not an array of the deployment")
-    merged = {**bounds, **_table(cfg.doc, f"sonar.tma.bounds.{array}")}
-    try:
-        b = make_bounds(_leaf_section(cfg, f"sonar.tma.bounds.{array}", merged, BoundsParams))
-    except Rejected as e:
-        raise ConfigError(f"sonar.tma.bounds.{array}", e.detail) from None
+    # BoundsParams checks what make_bounds requires: no Rejected here
+    b = make_bounds(array_bounds(cfg, array))
     return params, core, b, section(cfg, "sonar.tma.support", SupportParams)
 
 

@@ -1,5 +1,5 @@
-"""Declared unit and range of every numeric parameter (common.deploy.ranges), enforced
-when a deployment file is read."""
+"""Declared unit and range of every numeric parameter (RANGES of each parameter class,
+common.core.params), enforced when a deployment file is read."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import typing
 
 import pytest
 
+from common.core.params import Range
 from common.deploy.config import ConfigError, parse, section
-from common.deploy.ranges import Range, ranges_of
 from common.deploy.sections import SECTIONS, check_all
 
 
@@ -27,11 +27,12 @@ def _default(f: dataclasses.Field) -> typing.Any:  # type: ignore[type-arg]
 
 @pytest.mark.parametrize("name", sorted(SECTIONS))
 def test_every_numeric_parameter_has_a_range_that_holds_its_default(name: str) -> None:
-    cls, ranges = SECTIONS[name], ranges_of(name)
+    cls = SECTIONS[name]
+    ranges = cls.RANGES
     hints = typing.get_type_hints(cls)
     fields = [f for f in dataclasses.fields(cls) if _numeric(hints[f.name])]
     missing = [f.name for f in fields if f.name not in ranges]
-    assert not missing, f"[{name}] numeric keys without a range in common/deploy/ranges.py: {missing}"
+    assert not missing, f"[{name}] numeric keys without a range in RANGES: {missing}"
     for f in fields:
         d = _default(f)
         for v in d if isinstance(d, (list, tuple)) else [d]:

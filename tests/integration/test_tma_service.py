@@ -343,7 +343,7 @@ def test_config_defaults_and_per_array_bounds():
     ({"ctma": {"q9": 1.0}}, "sonar.tma.ctma.q9"),
     ({"bounds": {"a3": {"r_min": 1.0}}}, "sonar.tma.bounds.a3"),
     ({"bounds": {"r_min": "far"}}, "sonar.tma.bounds.a1.r_min"),
-    ({"bounds": {"a1": {"r_min": 200000.0}}}, "sonar.tma.bounds.a1"),
+    ({"bounds": {"a1": {"r_min": 200000.0}}}, "sonar.tma.bounds.a1.r_min"),
 ])
 def test_config_errors_name_the_key(tma, key):
     with pytest.raises(ConfigError) as e:

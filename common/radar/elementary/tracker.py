@@ -32,6 +32,7 @@ unsupported ones could not be told apart from the right one.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -41,6 +42,7 @@ from common.core.assignment import nearest_neighbour
 from common.core.crossing import CrossingManager, CrossingParams
 from common.core.gating import chi2_gate, gate, overlap_pairs, pair_distances, window_pairs
 from common.core.motion import bistatic_F, bistatic_Q
+from common.core.params import PROB_OPEN, Params, Range, Rule, count, non_negative, order, positive, unbounded
 from common.core.rejection import Rejected
 from common.core.track_table import Status, TrackTable
 from common.radar.elementary.initiation import compatible, initial_state, propagate
@@ -79,7 +81,7 @@ def drop_acceleration(x: np.ndarray, P: np.ndarray, memory: np.ndarray) -> None:
 
 
 @dataclass(frozen=True)
-class ElementaryParams:
+class ElementaryParams(Params):
     """Parameters of table [radar.tracker] (units: m, s, rad).
 
     sigma_gamma: sigma_gamma of Q [20] (white jerk on r_b), also sigma_v~ of [14].
@@ -105,6 +107,19 @@ class ElementaryParams:
     score_delete: float = 0.0
     max_coast: int = 5
     max_coast_tentative: int = 1
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "sigma_gamma": positive("m/s^3 (jerk sigma)"), "sigma_omega": positive("rad/s^2"),
+        "gate_prob": PROB_OPEN, "delta_vb": positive("m/s"),
+        "sigma_gamma_init": positive("m/s^2"), "sigma_omega_init": positive("rad/s"),
+        "score_per_channel": non_negative("score"), "ambiguity_penalty": non_negative("score"),
+        "miss_penalty": non_negative("score"), "score_max": positive("score"),
+        "confirm_score": unbounded("score", "a score has no natural end; the rules place it"),
+        "score_delete": unbounded("score", "a score has no natural end; the rules place it"),
+        "max_coast": count(0), "max_coast_tentative": count(0),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (
+        order("score_delete", "confirm_score"), order("confirm_score", "score_max", strict=False))
 
 
 @dataclass(frozen=True)

@@ -21,15 +21,19 @@ angle counter-clockwise from East; cos(theta - theta_i) is the same in both).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from common.core.angles import TWO_PI, wrap_2pi, wrap_pi
+from common.core.params import INF, Params, Range, Rule, count, non_negative, order, positive, unbounded
 from common.radar.geometry.localisation import Constraints, block_localise, gauss_newton, residuals
+
+_ALTITUDE = "height in the deployment's frame (its origin is the file's choice)"
 
 
 @dataclass(frozen=True)
-class InitParams:
+class InitParams(Params):
     """Thresholds of module 62.
 
     az_gate_deg: test 1, maximum azimuth difference of the two elementary tracks.
@@ -66,6 +70,18 @@ class InitParams:
     alt_bands: int = 9
     alt_band_low: float = 300.0
     alt_band_ratio: float = 1.6
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "az_gate_deg": Range("deg", 0.0, 180.0, "(]"), "cos_tol": non_negative(),
+        "max_elevation_deg": Range("deg", 0.0, 90.0, "(]"), "k_sigma": positive("sigma"),
+        "init_block_levels": count(0), "init_box_sigma": positive("sigma"),
+        "z_min": unbounded("m", _ALTITUDE), "z_max": unbounded("m", _ALTITUDE),
+        "v_max": positive("m/s"), "sigma_vz": positive("m/s"),
+        "z_prior_mean": unbounded("m", _ALTITUDE), "z_prior_sigma": positive("m"),
+        "alt_bands": count(1), "alt_band_low": positive("m"),
+        "alt_band_ratio": Range("", 1.0, INF, "()"),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (order("z_min", "z_max"),)
 
     @property
     def z_prior(self) -> tuple[float, float] | None:

@@ -5,8 +5,9 @@ its arrival rule (common.radar.fusion.arrival)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
+from common.core.params import PROB_OPEN, Range, count, non_negative, positive
 from common.radar.fusion.initiation import InitParams
 
 
@@ -86,3 +87,17 @@ class FusionParams(InitParams):
     reopen_altitude: bool = True
     reopen_watch: bool = True
     segment_accel: float = 10.0
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        **InitParams.RANGES,
+        "gate_prob": PROB_OPEN,
+        "q": positive("m^2/s^3"), "q_manoeuvre": positive("m^2/s^3"), "q_z": positive("m^2/s^3"),
+        "sojourn_quiet": positive("s"), "sojourn_manoeuvre": positive("s"),
+        "band_prune": Range("weight", 0.0, 1.0, "[)"),
+        "band_prune_init": Range("weight", 0.0, 1.0, "[)"),
+        "band_merge": non_negative("sigma"), "band_linear": non_negative(),
+        "meas_inflation": positive(), "confirm_cycles": count(1), "confirm_bases": count(2),
+        "max_coast": count(0), "coast_cycles": count(1), "max_wait": positive("s"),
+        "max_lead": positive("s"),
+        "eq_gate_prob": PROB_OPEN, "segment_accel": non_negative("m/s^2"),
+    }

@@ -23,24 +23,28 @@ channels every fused plot is kept (singles too), with n > 2 only score >= n - p.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
 from common.core.gating import overlap_pairs
+from common.core.params import Params, Range, positive
 from common.core.rejection import Rejected
 
 COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz")
 
 
 @dataclass(frozen=True)
-class PlotterParams:
+class PlotterParams(Params):
     """Parameters of table [radar.plotter].
 
     n_sigma: half-width of the aggregation intervals in sigmas (2, as in 001 [5]).
     """
 
     n_sigma: float = 2.0
+
+    RANGES: ClassVar[dict[str, Range]] = {"n_sigma": positive("sigma")}
 
 
 @dataclass

@@ -6,15 +6,30 @@ broadband x = [brg, brg_rate, level, level_rate] or narrowband with [freq, freq_
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
+from common.core.params import (
+    PROB_OPEN,
+    Params,
+    Range,
+    Rule,
+    ascending_pair,
+    count,
+    non_negative,
+    positive,
+    two_values,
+    unbounded,
+)
+
+# a level in dB on the detector's SNR scale: every real is a level (negative: below the noise)
+LEVEL = "any level in dB (negative: below the noise)"
 
 
 @dataclass(frozen=True)
-class TrackerParams:
+class TrackerParams(Params):
     """[sonar.tracker] parameters (000 first embodiment).
 
     mode: "broadband" z = [brg, amp], "narrowband" z = [brg, amp, freq], or "auto"
@@ -75,6 +90,27 @@ class TrackerParams:
     ml_rate_tol_deg_s: float = 0.1
     history_keep_deleted: int = 64
     d_merge: float = 9.21
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "q_theta": positive("rad^2/s^3"), "q_theta_quiet": non_negative("rad^2/s^3"),
+        "imm_sojourn_s": positive("s"),
+        "q_a": non_negative("dB^2/s^3"), "q_f": non_negative("Hz^2/s^3"),
+        "sigma_amp_db": positive("dB"), "sigma_freq_hz": positive("Hz"),
+        "p_d": PROB_OPEN, "p_fa": PROB_OPEN, "beam_spacing_deg": positive("deg"),
+        "d_thr": unbounded("dB", LEVEL), "clutter_level_db": non_negative("dB"),
+        "alpha": PROB_OPEN, "beta": PROB_OPEN, "delete_drop": positive("log-likelihood"),
+        "endfire_deg": Range("deg", 0.0, 90.0, "(]"),
+        "init_brg_rate_sigma": positive("rad/s"), "init_amp_rate_sigma": positive("dB/s"),
+        "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
+        "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
+        "history_keep_deleted": count(0), "d_merge": non_negative("d^2"),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (
+        two_values("imm_sojourn_s"), ascending_pair("band_hz"),
+        # T1 = ln(beta / (1 - alpha)) < T2 = ln((1 - beta) / alpha)  <=>  alpha + beta < 1
+        Rule(("alpha", "beta"), lambda a, b: a + b < 1.0, "alpha + beta < 1 (delete threshold T1 below "
+             "confirm threshold T2)"),
+    )
 
 
 def transition(narrowband: bool, T: np.ndarray | float) -> np.ndarray:

@@ -4,9 +4,10 @@ seed 000's multiple-hypothesis mode."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
-from common.sonar.bearing.params import TrackerParams
+from common.core.params import Params, Range, Rule, count, non_negative, order, positive, unbounded
+from common.sonar.bearing.params import LEVEL, TrackerParams
 
 
 @dataclass(frozen=True)
@@ -21,7 +22,7 @@ class SonarTrackerParams(TrackerParams):
 
 
 @dataclass(frozen=True)
-class MhtParams:
+class MhtParams(Params):
     """[sonar.tracker.mht] seed 000 multiple-hypothesis mode (mode_association = "mht").
 
     p_d_max, d_thr: P_D = P_D_max / 2 erfc((D_thr - a_pre) / (sigma_a_pre sqrt 2)), D_thr
@@ -69,3 +70,20 @@ class MhtParams:
     n_retro: int = 10
     max_hyp_track: int = 16
     max_hyp_cycle: int = 20000
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "p_d_max": Range("probability", 0.0, 1.0, "(]"), "d_thr": unbounded("dB", LEVEL),
+        "rho_f": positive("1/(rad dB)"), "gate": positive("sigma"),
+        "c_krit": Range("weight", 0.0, 1.0, "[)"), "d_merge_hyp": non_negative("sigma"),
+        "d_split": positive("sigma"), "d_merge": non_negative("sigma"),
+        "A": positive("likelihood ratio"), "B": positive("likelihood ratio"),
+        "za_krit": count(1), "za_max": count(1), "n_delete": count(1),
+        "sigma_max_deg": positive("deg"), "merge_sigma_max_deg": positive("deg"),
+        "res_deg": positive("deg"), "d_auf": positive("sigma"), "relink_deg": positive("deg"),
+        "n_retro": count(0),
+        "max_hyp_track": count(1), "max_hyp_cycle": count(1),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (
+        order("A", "B"), order("za_krit", "za_max", strict=False),
+        order("d_merge_hyp", "d_split", strict=False),
+    )

@@ -18,11 +18,12 @@ the error handling checks and corrects those of the current leg.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import ClassVar, Sequence
 
 import numpy as np
 from scipy.special import chdtri
 
+from common.core.params import INF, PROB_OPEN, Params, Range, Rule, count, order, positive
 from common.sonar.tma.bearings_only import Support, TmaSolution, detect_manoeuvre, solve_tma
 from common.sonar.tma.bounds import (
     MINIMAL_BOUNDS,
@@ -37,7 +38,7 @@ from common.sonar.tma.constrained_solve import legs_inside, new_leg_bounds, solv
 
 
 @dataclass(frozen=True)
-class CtmaParams:
+class CtmaParams(Params):
     """Parameters of the TMA/CTMA cycle (``[sonar.tma.ctma]``).
 
     q1, q2, q3: residual-factor thresholds (q1 > q2 > q3) over 1, 2, 3 consecutive
@@ -68,6 +69,16 @@ class CtmaParams:
     max_iter: int = 50
     detect_manoeuvres: bool = False
     manoeuvre_p_false: float = 1e-3
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "q1": Range("", 1.0, INF, "()"), "q2": Range("", 1.0, INF, "()"),
+        "q3": Range("", 1.0, INF, "()"), "q_minimal": Range("", 1.0, INF, "()"),
+        "edge_tol": Range("fraction", 0.0, 0.5, "[)"), "edge_cycles": count(1),
+        "max_corrections": count(0), "roc_window": count(2),
+        "roc_threshold": positive("fraction"), "tma_tol": positive("m"), "max_iter": count(1),
+        "manoeuvre_p_false": PROB_OPEN,
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (order("q2", "q1"), order("q3", "q2"))
 
 
 def residual_factor(ctma_res: np.ndarray, tma_res: np.ndarray, sbrg: np.ndarray | float) -> float:

@@ -20,10 +20,11 @@ from __future__ import annotations
 from collections import OrderedDict, deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
+from common.core.params import ANGLE, Params, Range, Rule, count, non_negative, order, positive
 from common.core.rejection import Rejected
 from common.sonar.tma.bearings_only import Support
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
@@ -33,10 +34,10 @@ VERSION = 1
 
 
 @dataclass(frozen=True)
-class TmaParams:
+class TmaParams(Params):
     """``[sonar.tma]``: decimation and buffering of the TMA service.
 
-    cycle_dt: message-time seconds between two TMA cycles of a track.
+    cycle_dt: message-time seconds between two TMA cycles of a track (0: every btracks cycle).
     sample_dt: minimum spacing (s) of the bearings kept for TMA (0: keep all).
     own_keep: own-ship positions kept for matching btracks by time.
     max_pending: btracks messages that may wait for their own-ship position.
@@ -47,9 +48,14 @@ class TmaParams:
     own_keep: int = 64
     max_pending: int = 8
 
+    RANGES: ClassVar[dict[str, Range]] = {
+        "cycle_dt": non_negative("s"), "sample_dt": non_negative("s"),
+        "own_keep": count(1), "max_pending": count(0),
+    }
+
 
 @dataclass(frozen=True)
-class SupportParams:
+class SupportParams(Params):
     """``[sonar.tma.support]``: course and speed support values of 002 (claims 3-10).
 
     Values from another source, given to every track of the array from its first cycle
@@ -65,6 +71,11 @@ class SupportParams:
     course_sigma: float = 0.0
     speed: float = 0.0
     speed_sigma: float = 0.0
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "course": ANGLE, "course_sigma": non_negative("rad"),
+        "speed": non_negative("m/s"), "speed_sigma": non_negative("m/s"),
+    }
 
     def supports(self, t: float) -> list[Support]:
         """The configured support values at time t."""
@@ -89,7 +100,7 @@ BOUNDS_FIELDS = ("r_min", "r_max", "course_min", "course_max", "speed_min", "spe
 
 
 @dataclass(frozen=True)
-class BoundsParams:
+class BoundsParams(Params):
     """``[sonar.tma.bounds]`` and per-array ``[sonar.tma.bounds.<array>]`` (003).
 
     r_min, r_max: range bounds (m).
@@ -105,6 +116,13 @@ class BoundsParams:
     course_max: float = TWO_PI
     speed_min: float = MINIMAL_BOUNDS.v_min
     speed_max: float = MINIMAL_BOUNDS.v_max
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "r_min": non_negative("m"), "r_max": positive("m"),
+        "course_min": ANGLE, "course_max": ANGLE,
+        "speed_min": non_negative("m/s"), "speed_max": positive("m/s"),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (order("r_min", "r_max"), order("speed_min", "speed_max"))
 
 
 def make_bounds(p: BoundsParams | Mapping[str, Any]) -> Bounds:
