@@ -108,10 +108,11 @@ from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import parse, section  # noqa: E402
 from common.evaluation.crossing_eval import EvalParams, Frame, Numbers, associate, separation  # noqa: E402
-from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
+from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.mht.tracker import MhtTracker  # noqa: E402
 from common.sonar.trackers import BearingTrackerCore, bearing_tracker  # noqa: E402
+from common.wire.sim_messages import run_scenario  # noqa: E402
 
 DEG = math.radians(1.0)
 EVAL = EvalParams(sigma=(DEG,), gate=5.0, resolved=6.0, near=1.0, far=8.0, lost_cycles=3,

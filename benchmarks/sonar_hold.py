@@ -119,9 +119,10 @@ from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
 from common.evaluation.crossing_eval import one_to_one  # noqa: E402
-from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
+from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.trackers import bearing_tracker  # noqa: E402
+from common.wire.sim_messages import run_scenario  # noqa: E402
 
 CASES = ("sonar_hold5", "sonar_hold_cpa", "sonar_hold_cross_eq", "sonar_hold_cross_uneq",
          "sonar_hold_cross_turn", "sonar_hold_cross_slow")
