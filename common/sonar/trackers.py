@@ -1,7 +1,7 @@
 """The one interface of seed 000's bearing tracker in its two association modes, and the
 one factory that picks the mode: ``mode_association`` "gnn" the single-hypothesis mode
 (common.sonar.bearing.tracker.BearingTracker), "mht" the multiple-hypothesis mode
-(common.sonar.mht.tracker.MhtTracker). Callers branch on neither."""
+(common.sonar.mht.tracker.MhtTracker). Callers build either through the factory alone."""
 
 from __future__ import annotations
 
