@@ -29,14 +29,15 @@ from dataclasses import replace
 import numpy as np
 
 from common.evaluation.metrics import gospa
-from common.sonar.bearing.tracker import BearingTracker, TrackerParams
+from common.sonar.mht.params import MhtParams, SonarTrackerParams
+from common.sonar.trackers import bearing_tracker
 
 DT, SIGMA, PD, WARM, TIMED = 10.0, math.radians(0.2), 0.9, 15, 20
 C_DEG = 2.0
-PARAMS = TrackerParams(mode="broadband", p_d=PD, init_brg_rate_sigma=2e-4)
+PARAMS = SonarTrackerParams(mode="broadband", p_d=PD, init_brg_rate_sigma=2e-4)
 
 
-def params(N: int) -> TrackerParams:
+def params(N: int) -> SonarTrackerParams:
     """PARAMS with P_FA scaled by the clutter density (N/2 false detections per cycle):
     1e-3 per beam at N = 10, i.e. per beam and per dB of level near the targets' level
     (the clutter levels are far below the targets', so the bearing-only rate N/2 x
@@ -65,7 +66,7 @@ def scenario(N: int, seed: int = 0) -> list[tuple[float, np.ndarray, np.ndarray,
 
 def run_ours(cycles: list, N: int) -> tuple[float, float]:
     """Median ms per timed cycle and mean GOSPA (deg) of our tracker."""
-    tr = BearingTracker(params(N), "cylindrical", SIGMA)
+    tr = bearing_tracker(params(N), MhtParams(), "cylindrical", SIGMA)
     times, g = [], []
     for k, (t, brg, amp, truth) in enumerate(cycles):
         t0 = time.perf_counter()

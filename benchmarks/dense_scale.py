@@ -129,10 +129,10 @@ from common.deploy.config import parse, section
 from common.evaluation.metrics import count_switches
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.radar.fusion.params import FusionParams
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import gtracks_message, plots_of
-from common.wire.sim_messages import truth_state
+from common.wire.sim_messages import run_scenario, truth_state
 
 REPO = Path(__file__).resolve().parents[1]
 WARMUP = 30.0

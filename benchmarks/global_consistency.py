@@ -23,9 +23,8 @@ from common.deploy.config import load, section
 from common.evaluation.pcrlb import Evaluation, base_information, monte_carlo_nees, score_targets
 from common.radar.fusion.params import FusionParams
 from common.sim.scenario import load_scenario, radar_scene
-from common.sim.simulator import run_scenario
 from common.wire.radar_chain import RadarChain
-from common.wire.sim_messages import truth_state
+from common.wire.sim_messages import run_scenario, truth_state
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 SETTLE = 30.0

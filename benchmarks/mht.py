@@ -108,10 +108,11 @@ from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import parse, section  # noqa: E402
 from common.evaluation.crossing_eval import EvalParams, Frame, Numbers, associate, separation  # noqa: E402
-from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
-from common.sonar.bearing.tracker import BearingTracker  # noqa: E402
+from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.mht.tracker import MhtTracker  # noqa: E402
+from common.sonar.trackers import BearingTrackerCore, bearing_tracker  # noqa: E402
+from common.wire.sim_messages import run_scenario  # noqa: E402
 
 DEG = math.radians(1.0)
 EVAL = EvalParams(sigma=(DEG,), gate=5.0, resolved=6.0, near=1.0, far=8.0, lost_cycles=3,
@@ -190,14 +191,12 @@ def case_doc(name: str) -> dict[str, Any]:
     return doc
 
 
-def build(doc: dict[str, Any], mode: str) -> BearingTracker | MhtTracker:
+def build(doc: dict[str, Any], mode: str) -> BearingTrackerCore:
     cfg = parse(copy.deepcopy({k: v for k, v in doc.items() if k != "sim"}))
-    p = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode="broadband")
+    p = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode="broadband", mode_association=mode)
     arr = cfg.arrays[0]
-    if mode == "gnn":
-        return BearingTracker(p, arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mp = replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=CLUTTER / (2 * math.pi * 10.0))
-    return MhtTracker(p, mp, arr.kind, arr.sigma0)
+    return bearing_tracker(p, mp, arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
 
 
 def run_one(doc: dict[str, Any], mode: str, seed: int, sc: Score) -> None:
@@ -284,13 +283,9 @@ def scale_rows() -> list[tuple[int, str, float, float, int]]:
     for N in (10, 50, 200):
         cycles = scale_scene.scenario(N)
         for mode in ("gnn", "mht"):
-            p = scale_scene.params(N)
-            trk: BearingTracker | MhtTracker
-            if mode == "gnn":
-                trk = BearingTracker(p, "cylindrical", scale_scene.SIGMA)
-            else:
-                trk = MhtTracker(p, MhtParams(rho_f=(N / 2) / (2 * math.pi * 10.0)), "cylindrical",
-                                 scale_scene.SIGMA)
+            p = replace(scale_scene.params(N), mode_association=mode)
+            trk = bearing_tracker(p, MhtParams(rho_f=(N / 2) / (2 * math.pi * 10.0)), "cylindrical",
+                                  scale_scene.SIGMA)
             times, per_track = [], []
             for k, (t, brg, amp, _) in enumerate(cycles):
                 t0 = time.perf_counter()

@@ -39,7 +39,8 @@ from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_ran
 from common.radar.plots.channel_fusion import PlotFusion, Plots
 from common.sim.radar import radar_plots
 from common.sim.scenario import RadarChannelSim, RadarSim
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
+from common.wire.sim_messages import run_scenario
 
 REPO = Path(__file__).resolve().parents[1]
 UNITS = np.array([150.0, 2.0, np.radians(1.5)])  # GOSPA units: default channel sigmas

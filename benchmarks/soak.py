@@ -6,7 +6,7 @@ Real processes: a ``pfusion router`` and the radar services of ``scenarios/soak.
 (2 bases x 2 channels, 2 aircraft flying circles for ever: 2 channel plotters, 2 elementary
 trackers, global fusion), each a child process on a free loopback port
 (``common.bus.local_run.Deployment``). The scene's plots come from the simulator core
-(``common.sim.simulator.run_scenario``, the same messages as ``pfusion simulate``),
+(``common.wire.sim_messages.run_scenario``, the same messages as ``pfusion simulate``),
 published by this process with stamped reliable BLOCK publishers.
 
 Pacing (deviation from ``pfusion simulate --speed 0``): BLOCK congestion control only
@@ -43,8 +43,9 @@ import zenoh
 from common.bus.local_run import ROOT, Deployment
 from common.bus.transport import LossCount, Publisher, attachment_of
 from common.deploy.config import load
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
 from common.wire import protocol
+from common.wire.sim_messages import run_scenario
 
 REPO = Path(__file__).resolve().parents[1]
 

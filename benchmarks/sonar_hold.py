@@ -119,10 +119,10 @@ from common.core.angles import wrap_pi  # noqa: E402
 from common.core.crossing import CrossingParams  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
 from common.evaluation.crossing_eval import one_to_one  # noqa: E402
-from common.sim.simulator import load_scenario, run_scenario  # noqa: E402
-from common.sonar.bearing.tracker import BearingTracker, TrackerParams  # noqa: E402
-from common.sonar.mht.params import MhtParams  # noqa: E402
-from common.sonar.mht.tracker import MhtTracker  # noqa: E402
+from common.sim.simulator import load_scenario  # noqa: E402
+from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
+from common.sonar.trackers import bearing_tracker  # noqa: E402
+from common.wire.sim_messages import run_scenario  # noqa: E402
 
 CASES = ("sonar_hold5", "sonar_hold_cpa", "sonar_hold_cross_eq", "sonar_hold_cross_uneq",
          "sonar_hold_cross_turn", "sonar_hold_cross_slow")
@@ -204,15 +204,10 @@ def run_once(path: Path, seed: int, mode: str = "gnn") -> RunScore:
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
     scn = load_scenario(doc)
-    params = section(cfg, "sonar.tracker", TrackerParams)
-    params = replace(params, mode="broadband") if params.mode == "auto" else params
-    trk: BearingTracker | MhtTracker
-    if mode == "mht":
-        rho_f = doc["sim"]["sonar"]["clutter"] / (2.0 * math.pi * 10.0)
-        trk = MhtTracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
-                         arr.kind, arr.sigma0)
-    else:
-        trk = BearingTracker(params, arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
+    params = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode_association=mode)
+    rho_f = doc["sim"]["sonar"]["clutter"] / (2.0 * math.pi * 10.0)
+    trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
+                          arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     sc = Scorer(arr.sigma0)
     for _, msgs in run_scenario(scn, [], cfg.arrays, seed):
         truth = next(m for k, m in msgs if k == "sim/truth/sonar")

@@ -45,7 +45,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -53,12 +52,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from common.evaluation.pcrlb import mean_nees_interval  # noqa: E402
-from common.sonar.bearing.tracker import BearingTracker, TrackerParams  # noqa: E402
-from common.sonar.mht.params import MhtParams  # noqa: E402
-from common.sonar.mht.tracker import MhtTracker  # noqa: E402
+from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.tma.bounds import MINIMAL_BOUNDS  # noqa: E402
 from common.sonar.tma.constrained import TmaTracker  # noqa: E402
 from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
+from common.sonar.trackers import bearing_tracker  # noqa: E402
 
 KN = 1852.0 / 3600.0
 
@@ -92,7 +90,7 @@ def bearings(t: np.ndarray, own: np.ndarray, beta: np.ndarray) -> np.ndarray:
 
 def filtered(t: np.ndarray, z: np.ndarray, sig: float) -> tuple[np.ndarray, np.ndarray]:
     """The bearing tracker's filtered bearings and sigmas of the one contact."""
-    tr = BearingTracker(replace(TrackerParams(mode="broadband"), crossing=False), "cylindrical", sig)
+    tr = bearing_tracker(SonarTrackerParams(mode="broadband", crossing=False), MhtParams(), "cylindrical", sig)
     b, s = np.empty(t.size), np.empty(t.size)
     for k in range(t.size):
         c = tr.step(t[k], np.array([z[k] % (2 * math.pi)]), np.array([100.0]), 0.0)
@@ -107,7 +105,8 @@ def mht_register(t: np.ndarray, z: np.ndarray, sig: float, own: np.ndarray
     common.sonar.mht.retrodiction), both feeds: (times, bearings, sigmas, own positions) of
     the main hypothesis's detections ("mht raw") and of the retrodicted bearings ("mht
     smoothed")."""
-    tr = MhtTracker(TrackerParams(mode="broadband"), MhtParams(), "cylindrical", sig)
+    tr = bearing_tracker(SonarTrackerParams(mode="broadband", mode_association="mht"), MhtParams(),
+                         "cylindrical", sig)
     for k in range(t.size):
         c = tr.step(t[k], np.array([z[k] % (2 * math.pi)]), np.array([100.0]), 0.0,
                     own_x=own[k, 0], own_y=own[k, 1])

@@ -17,6 +17,7 @@ import numpy as np
 
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, Bounds
 from common.sonar.tma.manager import TmaManager, TmaParams
+from common.wire.sonar_messages import btracks_from, tma_message
 
 N_TRACKS = 50
 PERIOD = 20.0
@@ -61,9 +62,9 @@ def run(cycle_dt: float, bounds: Bounds) -> tuple[float, float, int]:
     t0 = time.perf_counter()
     for t, own, msg in data:
         mgr.add_own(t, float(own[0]), float(own[1]))
-        mgr.push(msg)
+        mgr.push(btracks_from(msg))
         for m in mgr.ready()[0]:
-            mgr.step(m, {})
+            tma_message(mgr.step(m, {}))
     wall = time.perf_counter() - t0
     return mgr.cycles / wall, DURATION / wall, mgr.cycles
 

@@ -1,12 +1,12 @@
-"""Scenario simulator core: a deterministic generator of wire-protocol v1 messages.
+"""Scenario simulator core: a deterministic generator of the typed scans of the 001 and
+000 measurement models (common.wire.sim_messages turns them into wire messages).
 
-Pure: no Zenoh, no clocks, no printing. :func:`run_scenario` yields, for each scan time
-t of scenario time (the sorted union of the radar and sonar scan times in
-[0, duration)), the list of (key suffix, message) produced at t:
+Pure: no Zenoh, no clocks, no printing. :func:`scans` yields, for each scan time t of
+scenario time (the sorted union of the radar and sonar scan times in [0, duration)),
+the list of scans produced at t:
 
-- ``sim/truth/radar`` and ``radar/plots/<base>/<channel>`` at radar scan times;
-- ``sim/truth/sonar`` (one per array) and ``sonar/detections/<array>`` at sonar
-  scan times.
+- :class:`RadarTruth`, then a :class:`RadarScan` per base and channel, at radar scan times;
+- per array a :class:`SonarTruth` and a :class:`SonarScan`, at sonar scan times.
 
 In a geodetic deployment (scn.origin set) a radar target's mover runs in the tangent
 plane with z its ellipsoidal height; each position is re-projected along the vertical to
@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import zlib
 from collections.abc import Iterator
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,9 +33,65 @@ from common.sim.radar import radar_plots
 from common.sim.scenario import Scenario, load_scenario
 from common.sim.sonar import sonar_detections
 
-__all__ = ["load_scenario", "repeated", "run_scenario", "scan_times"]
+__all__ = ["OwnShip", "RadarScan", "RadarTruth", "Scan", "SonarScan", "SonarTruth", "load_scenario",
+           "repeated_scans", "scan_times", "scans"]
 
-Message = tuple[str, dict[str, Any]]
+
+@dataclass(frozen=True)
+class OwnShip:
+    """Own-ship position (m), heading (rad) and speed (m/s) at a sonar scan."""
+
+    x: float
+    y: float
+    heading: float
+    speed: float
+
+
+@dataclass(frozen=True)
+class RadarTruth:
+    """The radar targets present at a scan: ids (n,), positions and velocities (n, 3)."""
+
+    t: float
+    id: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+
+
+@dataclass(frozen=True)
+class RadarScan:
+    """The 001 plots of one channel of one base: columns of common.sim.radar.COLUMNS."""
+
+    t: float
+    base: str
+    channel: str
+    plots: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class SonarTruth:
+    """The sonar targets present at a scan, seen from one array: ids (n,), positions and
+    velocities (n, 3), true bearings (n,)."""
+
+    t: float
+    array: str
+    own: OwnShip
+    id: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    brg: np.ndarray
+
+
+@dataclass(frozen=True)
+class SonarScan:
+    """The 000 detections of one array: columns brg, amp[, freq], sbrg."""
+
+    t: float
+    array: str
+    own: OwnShip
+    detections: dict[str, np.ndarray]
+
+
+Scan = RadarTruth | RadarScan | SonarTruth | SonarScan
 
 
 def scan_times(duration: float, period: float) -> np.ndarray:
@@ -56,9 +112,8 @@ def _truth(movers: list[Mover], t: np.ndarray) -> tuple[np.ndarray, ...]:
     return np.stack(pos), np.stack(vel), np.stack(alive), np.array([m.id for m in movers])
 
 
-def _own(pos: np.ndarray, vel: np.ndarray, heading: float) -> dict[str, float]:
-    return {"x": float(pos[0]), "y": float(pos[1]), "heading": float(heading),
-            "speed": float(np.hypot(vel[0], vel[1]))}
+def _own(pos: np.ndarray, vel: np.ndarray, heading: float) -> OwnShip:
+    return OwnShip(float(pos[0]), float(pos[1]), float(heading), float(np.hypot(vel[0], vel[1])))
 
 
 def _check_ids(names: set[str], known: set[str], key: str) -> None:
@@ -67,14 +122,14 @@ def _check_ids(names: set[str], known: set[str], key: str) -> None:
         raise ConfigError(f"{key}.{extra[0]}", "not in the deployment")
 
 
-def run_scenario(
+def scans(
     scn: Scenario,
     bases: list[RadarBase],
     arrays: list[SonarArray],
     seed: int,
     n_scans: int | None = None,
-) -> Iterator[tuple[float, list[Message]]]:
-    """Yield (t, [(key suffix, message)]) per scan time; at most n_scans steps."""
+) -> Iterator[tuple[float, list[Scan]]]:
+    """Yield (t, scans) per scan time; at most n_scans steps."""
     steps: dict[float, list[tuple[str, int]]] = {}
     radar, sonar = scn.radar, scn.sonar
     if radar is not None:
@@ -96,11 +151,6 @@ def run_scenario(
         for k, t in enumerate(ts):
             steps.setdefault(round(float(t), 9), []).append(("sonar", k))
     rngs: dict[str, np.random.Generator] = {}
-    seqs: dict[str, int] = {}
-
-    def stamp(key: str, msg: dict[str, Any]) -> Message:
-        seqs[key] = seqs.get(key, -1) + 1
-        return key, {"v": 1, "t": msg.pop("t"), "seq": seqs[key], **msg}
 
     def rng(key: str) -> np.random.Generator:
         return rngs.setdefault(key, _rng(seed, key))
@@ -108,22 +158,16 @@ def run_scenario(
     for i, t in enumerate(sorted(steps)):
         if n_scans is not None and i >= n_scans:
             return
-        out: list[Message] = []
+        out: list[Scan] = []
         for sensor, k in steps[t]:
             if sensor == "radar":
                 on = ra[:, k]
                 p, v = rp[on, k], rv[on, k]
-                out.append(("sim/truth/radar", {
-                    "v": 1, "t": t, "id": rid[on].tolist(),
-                    **{c: p[:, j].tolist() for j, c in enumerate("xyz")},
-                    **{f"v{c}": v[:, j].tolist() for j, c in enumerate("xyz")},
-                }))
+                out.append(RadarTruth(t, rid[on], p, v))
                 for b in bases:
                     for c in b.channels:
                         key = f"radar/plots/{b.id}/{c}"
-                        cols = radar_plots(p, v, b, radar.channel(c), radar, rng(key))
-                        out.append(stamp(key, {"t": t, "base": b.id, "channel": c,
-                                               **{n: a.tolist() for n, a in cols.items()}}))
+                        out.append(RadarScan(t, b.id, c, radar_plots(p, v, b, radar.channel(c), radar, rng(key))))
             else:
                 on = sa[:, k]
                 p, v = sp[on, k], sv[on, k]
@@ -131,40 +175,30 @@ def run_scenario(
                 d = p[:, :2] - own_p[k, :2]
                 brg = wrap_2pi(np.arctan2(d[:, 0], d[:, 1]))
                 for arr in arrays:
-                    out.append(("sim/truth/sonar", {
-                        "v": 1, "t": t, "array": arr.id, "own": dict(own), "id": sid[on].tolist(),
-                        "x": p[:, 0].tolist(), "y": p[:, 1].tolist(),
-                        "vx": v[:, 0].tolist(), "vy": v[:, 1].tolist(), "brg": brg.tolist(),
-                    }))
+                    out.append(SonarTruth(t, arr.id, own, sid[on], p, v, brg))
                     key = f"sonar/detections/{arr.id}"
                     cols = sonar_detections(own_p[k], own_v[k], float(own_h[k]), p, v, sl[on],
                                             [lines[j] for j in np.flatnonzero(on)], arr,
                                             sonar.array(arr.id), sonar, rng(key))
-                    out.append(stamp(key, {"t": t, "array": arr.id, "own": dict(own),
-                                           **{n: a.tolist() for n, a in cols.items()}}))
+                    out.append(SonarScan(t, arr.id, own, cols))
         yield t, out
 
 
-def repeated(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat: int,
-             gap: float) -> Iterator[tuple[float, list[Message]]]:
-    """`repeat` runs of run_scenario back to back in scenario time, each followed by
-    `gap` seconds of the scenario without targets; seq renumbered per key. ``cfg`` is the
-    deployment (its bases and arrays)."""
+def repeated_scans(scn: Scenario, cfg: Config, seed: int, n_scans: int | None, repeat: int,
+                   gap: float) -> Iterator[tuple[float, list[Scan]]]:
+    """`repeat` runs of :func:`scans` back to back in scenario time, each followed by
+    `gap` seconds of the scenario without targets. ``cfg`` is the deployment (its bases
+    and arrays)."""
     empty = dataclasses.replace(
         scn, duration=gap,
         radar=None if scn.radar is None else dataclasses.replace(scn.radar, targets=[]),
         sonar=None if scn.sonar is None else dataclasses.replace(scn.sonar, targets=[]))
-    seqs: dict[str, int] = {}
     for i in range(repeat):
         offset = i * (scn.duration + gap)
-        parts = [(0.0, run_scenario(scn, cfg.bases, cfg.arrays, seed + i, n_scans))]
+        parts = [(0.0, scans(scn, cfg.bases, cfg.arrays, seed + i, n_scans))]
         if gap > 0:
-            parts.append((scn.duration, run_scenario(empty, cfg.bases, cfg.arrays, seed + i)))
+            parts.append((scn.duration, scans(empty, cfg.bases, cfg.arrays, seed + i)))
         for shift, steps in parts:
-            for t, messages in steps:
+            for t, out in steps:
                 t_run = t + shift + offset
-                for key, msg in messages:
-                    msg["t"] = t_run
-                    if "seq" in msg:
-                        msg["seq"] = seqs[key] = seqs.get(key, -1) + 1
-                yield t_run, messages
+                yield t_run, [dataclasses.replace(s, t=t_run) for s in out]

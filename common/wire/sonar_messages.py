@@ -1,19 +1,35 @@
-"""Sonar message builders: core results (common.sonar) -> wire dicts of docs/protocol.md.
-
-The services call these and nothing else to shape what they publish, so the wire form
-of a sonar product is defined in one place (the radar ones: common.wire.radar_messages).
+"""The sonar chain's messages (docs/protocol.md): builders from the seed 000, 002 and 003
+cores' typed values (common.sonar) and parsers into them, so that the wire dicts exist
+at the service boundary alone (the radar ones: common.wire.radar_messages). Parsers take
+a message decoded by ``protocol.decode`` or as built.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
+from common.core.params import ParamError
+from common.core.rejection import Rejected
 from common.sonar.bearing.tracker import Cycle
+from common.sonar.tma.bearings_only import Support
+from common.sonar.tma.bounds import MINIMAL_BOUNDS, Bounds
+from common.sonar.tma.constrained import CycleOutput
+from common.sonar.tma.manager import (
+    BOUNDS_FIELDS,
+    BoundsParams,
+    BTrack,
+    BTracks,
+    TmaReport,
+    TrackHistory,
+    make_bounds,
+)
 from common.wire import protocol
 
 
 def btracks_message(array: str, c: Cycle, narrowband: bool) -> dict[str, Any]:
-    """The btracks message of one cycle (docs/protocol.md)."""
+    """The btracks message of one seed 000 cycle (docs/protocol.md)."""
     cols = zip(c.ids.tolist(), c.confirmed.tolist(), c.x.tolist(), [p.ravel().tolist() for p in c.P],
                c.quality.tolist(), c.ambiguous.tolist(), c.ml.tolist())
     tracks = []
@@ -30,3 +46,65 @@ def btracks_message(array: str, c: Cycle, narrowband: bool) -> dict[str, Any]:
             for m in c.multiline
         ]
     return msg
+
+
+def btracks_from(msg: dict[str, Any]) -> BTracks:
+    """The seed 000 cycle of a btracks message as TMA reads it."""
+    return BTracks(msg["t"], msg["array"], [
+        BTrack(tr["id"], tr["status"] == "confirmed", np.asarray(tr["x"], dtype=float),
+               np.asarray(tr["P"], dtype=float)) for tr in msg["tracks"]])
+
+
+def history_message(array: str, t: float, track_id: int, found: tuple[str, dict[str, np.ndarray]]
+                    ) -> dict[str, Any]:
+    """The reply on sonar/history/<array>/<id>: status and register columns of one track
+    (a tracker's ``history_of``) at tracker time t."""
+    status, h = found
+    return {"v": protocol.VERSION, "t": t, "array": array, "id": track_id, "status": status,
+            "t_hist": h["t"], **{k: v for k, v in h.items() if k != "t"}}
+
+
+def history_from(msg: dict[str, Any]) -> TrackHistory:
+    """The seed 000 register of one track of a history reply."""
+    rows = np.column_stack((msg["t_hist"], msg["brg"], msg["sbrg"], msg["own_x"], msg["own_y"]))
+    return TrackHistory(msg["id"], msg["status"], rows)
+
+
+def tma_message(r: TmaReport) -> dict[str, Any]:
+    """The tma message of one TMA cycle (docs/protocol.md)."""
+    return {"v": protocol.VERSION, "t": r.t, "array": r.array,
+            "solutions": [_solution(tid, c) for tid, c in r.solutions]}
+
+
+def _solution(track: int, c: CycleOutput) -> dict[str, Any]:
+    """One solution entry: state (m, m/s) and P at c.t, range/course/speed, CTMA status."""
+    b = c.bounds or MINIMAL_BOUNDS
+    return {
+        "track": track, "t": c.t, "x": c.x, "y": c.y, "vx": c.vx, "vy": c.vy,
+        "P": np.asarray(c.P, float).reshape(-1).tolist(),
+        "range": c.range, "course": c.course, "speed": c.speed,
+        "constrained": c.constrained,
+        "bounds": [b.r_min, b.r_max, b.k_min, b.k_max, b.v_min, b.v_max],
+        "bounds_modified": c.bounds_modified, "phase": c.phase,
+        "residual_factor": c.residual_factor, "legs": list(c.legs),
+    }
+
+
+def bounds_from(msg: dict[str, Any]) -> tuple[Bounds, int | None]:
+    """Checked seed 003 bounds of a tma_bounds message and the track they are for (None:
+    every track). Bounds that break BoundsParams' rules are rejected as bad_bounds."""
+    try:
+        params = BoundsParams(*(msg[k] for k in BOUNDS_FIELDS))
+    except ParamError as e:
+        raise Rejected("bad_bounds", e.detail) from None
+    return make_bounds(params), msg.get("track")
+
+
+def support_from(msg: dict[str, Any]) -> tuple[int, Support]:
+    """(track, seed 002 support value) of a tma_support message; a range needs obs_x,
+    obs_y."""
+    ox, oy = msg.get("obs_x"), msg.get("obs_y")
+    if msg["kind"] == "range" and (ox is None or oy is None):
+        raise Rejected("bad_support", "a range support needs obs_x and obs_y")
+    xy = (0.0, 0.0) if ox is None or oy is None else (float(ox), float(oy))
+    return msg["track"], Support(msg["kind"], float(msg["value"]), float(msg["sigma"]), float(msg["t"]), xy)

@@ -5,13 +5,13 @@ answers root/sonar/history/A/<id> with the bearing register of a confirmed track
 (docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
 main hypothesis, with the retrodicted bearings beside). Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
-[sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only).
+[sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only); the
+core is built by common.sonar.trackers.bearing_tracker.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 
 import zenoh
 
@@ -20,11 +20,10 @@ from common.cli import add_common, load_config
 from common.core.crossing import CrossingParams
 from common.core.rejection import Rejected
 from common.deploy.config import section
-from common.sonar.bearing.tracker import BearingTracker
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
-from common.sonar.mht.tracker import MhtTracker
+from common.sonar.trackers import BearingTrackerCore, bearing_tracker
 from common.wire import protocol
-from common.wire.sonar_messages import btracks_message
+from common.wire.sonar_messages import btracks_message, history_message
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -39,15 +38,12 @@ def main(args: argparse.Namespace) -> int:
     mht = section(cfg, "sonar.tracker.mht", MhtParams)
     crossing = section(cfg, "sonar.crossing", CrossingParams)
     svc = Service("bearing_tracker", arr.id, cfg)
-    cores: list[BearingTracker | MhtTracker] = []
+    cores: list[BearingTrackerCore] = []
 
-    def tracker(narrowband: bool) -> BearingTracker | MhtTracker:
-        """The core, built at the first detection list when mode = "auto"."""
+    def tracker(has_freq: bool) -> BearingTrackerCore:
+        """The core, built at the first detection list (it resolves mode "auto")."""
         if not cores:
-            mode = params.mode if params.mode != "auto" else ("narrowband" if narrowband else "broadband")
-            p = replace(params, mode=mode)
-            cores.append(MhtTracker(p, mht, arr.kind, arr.sigma0) if params.mode_association == "mht"
-                         else BearingTracker(p, arr.kind, arr.sigma0, crossing))
+            cores.append(bearing_tracker(params, mht, arr.kind, arr.sigma0, crossing, has_freq))
         return cores[0]
 
     def on_det(key: str, payload: bytes) -> None:
@@ -81,11 +77,8 @@ def main(args: argparse.Namespace) -> int:
         found = core.history_of(int(chunk))
         if found is None:
             return
-        status, h = found
-        query.reply(query.key_expr, protocol.encode({
-            "v": protocol.VERSION, "t": float(core.t or 0.0), "array": arr.id,
-            "id": int(chunk), "status": status, "t_hist": h.pop("t"), **h,
-        }))
+        query.reply(query.key_expr, protocol.encode(
+            history_message(arr.id, float(core.t or 0.0), int(chunk), found)))
 
     svc.subscribe(f"sonar/detections/{arr.id}", on_det)
     svc.serve(f"sonar/history/{arr.id}/*", on_query)

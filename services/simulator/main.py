@@ -20,8 +20,9 @@ import zenoh
 
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
-from common.sim.simulator import load_scenario, repeated
+from common.sim.simulator import load_scenario
 from common.wire import protocol
+from common.wire.sim_messages import repeated
 
 log = logging.getLogger("simulate")
 

@@ -19,7 +19,8 @@ import pytest
 
 from benchmarks.crossing_swaps import CASES, SCENARIOS, Case, run_case
 from common.deploy.config import load
-from common.sim.simulator import load_scenario, repeated, run_scenario
+from common.sim.simulator import load_scenario
+from common.wire.sim_messages import repeated, run_scenario
 
 RUNS = 50
 

@@ -22,9 +22,10 @@ from common.bus.transport import Publisher, free_port, open_session
 from common.deploy.config import ZenohConfig, load
 from common.radar.fusion.cycle import GlobalFusion
 from common.radar.fusion.params import FusionParams
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
 from common.wire import protocol
 from common.wire.radar_messages import etracks_from
+from common.wire.sim_messages import run_scenario
 from tests.harness import ROOT, SCENARIOS, Deployment
 from tests.integration.test_run import TWO_TARGETS, Collector, Run
 from tests.radar.test_global_ekf import BASES, RX, TX, _Synth

@@ -31,8 +31,8 @@ from common.evaluation.pcrlb import Evaluation, base_information, monte_carlo_ne
 from common.radar.fusion.params import FusionParams
 from common.radar.geometry.bistatic import POS
 from common.sim.scenario import load_scenario, radar_scene
-from common.sim.simulator import run_scenario
 from common.wire.radar_chain import RadarChain
+from common.wire.sim_messages import run_scenario
 from tests.harness import Deployment, patient_scene
 
 SETTLE = 30.0  # s after a target's first global track before RMSE / NEES count

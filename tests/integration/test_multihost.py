@@ -47,10 +47,11 @@ from common.deploy.config import load
 from common.deploy.deployment import ChildSpec, plan
 from common.deploy.sections import check_all
 from common.radar.geometry.bistatic import POS
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
 from common.wire import protocol
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import etracks_message, plots_of
+from common.wire.sim_messages import run_scenario
 from tests.harness import REPO, SCENARIOS, Deployment
 from tests.netns import HUB_ADDRESS, NsProcess, Topology, unavailable
 

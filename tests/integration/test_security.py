@@ -37,9 +37,9 @@ from common.deploy.acl import access_control, grants, router_identity, site_iden
 from common.deploy.config import Config, ConfigError, ZenohConfig, load
 from common.deploy.deployment import plan
 from common.sim.scenario import load_scenario
-from common.sim.simulator import run_scenario
 from common.wire import protocol
 from common.wire.radar_chain import RadarChain
+from common.wire.sim_messages import run_scenario
 from services.router.main import router_config
 from tests.harness import SCENARIOS
 

@@ -1,4 +1,5 @@
-"""TMA service (002, 003): (a) the pure glue common.sonar.tma.manager, (b) the bounds message
+"""TMA service (002, 003): (a) the pure glue common.sonar.tma.manager (fed through the
+parsers and builders of common.wire.sonar_messages, as the service), (b) the bounds message
 and the [sonar.tma] configuration, (c) simulator -> router -> bearing tracker -> tma as
 real processes on scenarios/sonar_tma.toml.
 
@@ -24,11 +25,12 @@ import pytest
 from common.core.angles import wrap_pi
 from common.core.rejection import Rejected
 from common.deploy.config import ConfigError, load, parse
+from common.deploy.tma_config import tma_config
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.sonar.tma.crlb import position_rms_bound
-from common.sonar.tma.manager import SupportParams, TmaManager, TmaParams, make_bounds, thin
+from common.sonar.tma.manager import SupportParams, TmaManager, TmaParams, thin
 from common.wire import protocol
-from services.tma.main import tma_config
+from common.wire.sonar_messages import bounds_from, btracks_from, history_from, support_from, tma_message
 from tests.harness import ROOT, SCENARIOS, Deployment
 
 SIG = 0.01
@@ -74,15 +76,15 @@ def feed(mgr: TmaManager, t: float, tracks: list[dict[str, Any]],
     service, the manager gets the histories of the tracks it wants: the given ones, else
     the register every 20 s up to t (true bearings, or the constant brg[tid])."""
     mgr.add_own(t, *own_at(t))
-    mgr.push(btracks(t, tracks))
+    mgr.push(btracks_from(btracks(t, tracks)))
     ready, _ = mgr.ready()
     out = None
-    for msg in ready:
-        times = np.arange(0.0, msg["t"] + 1.0, 20.0)
+    for b in ready:
+        times = np.arange(0.0, b.t + 1.0, 20.0)
         given = histories or {}
         hist = {tid: given[tid] if tid in given else history(tid, times, (brg or {}).get(tid))
-                for tid in mgr.history_wanted(msg)}
-        out = mgr.step(msg, hist)
+                for tid in mgr.history_wanted(b)}
+        out = tma_message(mgr.step(b, {tid: None if h is None else history_from(h) for tid, h in hist.items()}))
     return out
 
 
@@ -90,16 +92,16 @@ def feed(mgr: TmaManager, t: float, tracks: list[dict[str, Any]],
 
 def test_btracks_wait_for_own_ship_and_unmatched_ones_are_dropped():
     mgr = TmaManager("a1")
-    mgr.push(btracks(20.0, []))
+    mgr.push(btracks_from(btracks(20.0, [])))
     assert mgr.ready() == ([], 0)
     mgr.add_own(20.0, 0.0, 60.0)
     ready, dropped = mgr.ready()
-    assert [m["t"] for m in ready] == [20.0] and dropped == 0
-    mgr.push(btracks(40.0, []))
+    assert [b.t for b in ready] == [20.0] and dropped == 0
+    mgr.push(btracks_from(btracks(40.0, [])))
     mgr.add_own(60.0, 0.0, 180.0)
-    mgr.push(btracks(60.0, []))
+    mgr.push(btracks_from(btracks(60.0, [])))
     ready, dropped = mgr.ready()
-    assert [m["t"] for m in ready] == [60.0] and dropped == 1
+    assert [b.t for b in ready] == [60.0] and dropped == 1
 
 
 def test_own_log_is_bounded():
@@ -119,9 +121,9 @@ def test_own_log_is_bounded():
 ])
 def test_push_rejects_unusable_btracks(msg, reason):
     mgr = TmaManager("a1")
-    mgr.push(btracks(10.0, []))
+    mgr.push(btracks_from(btracks(10.0, [])))
     with pytest.raises(Rejected) as e:
-        mgr.push(msg)
+        mgr.push(btracks_from(msg))
     assert e.value.reason == reason
     assert len(mgr.pending) == 1
 
@@ -131,7 +133,7 @@ def test_track_life_cycle_follows_btracks():
     feed(mgr, 0.0, [btrack(1, 0.0, "tentative"), btrack(2, 0.0)])
     assert set(mgr.tracks) == {2}
     msg = btracks(20.0, [btrack(1, 20.0), btrack(2, 20.0)])
-    assert mgr.history_wanted(msg) == [1]  # new; track 2 ran its cycle at 0 s (cycle_dt 60 s)
+    assert mgr.history_wanted(btracks_from(msg)) == [1]  # new; track 2 ran its cycle at 0 s (cycle_dt 60 s)
     feed(mgr, 20.0, msg["tracks"])
     assert set(mgr.tracks) == {1, 2}
     feed(mgr, 40.0, [btrack(1, 40.0)])
@@ -210,19 +212,19 @@ def test_bounds_messages_apply_to_all_or_one_track():
     mgr = TmaManager("a1", TmaParams(cycle_dt=0.0))
     times = np.arange(0.0, 1501.0, 20.0)
     feed(mgr, 1500.0, [btrack(1, 1500.0), btrack(2, 1500.0)], {1: history(1, times), 2: history(2, times)})
-    assert mgr.set_bounds(_bounds_msg()) == [1, 2]
+    assert mgr.set_bounds(*bounds_from(_bounds_msg())) == [1, 2]
     out = feed(mgr, 1520.0, [btrack(1, 1520.0), btrack(2, 1520.0)])
     assert all(s["bounds"] == pytest.approx([1000.0, 20000.0, 0.0, TWO_PI, 0.5, 8.0]) for s in out["solutions"])
     assert mgr.bounds == Bounds(1000.0, 20000.0, 0.0, TWO_PI, 0.5, 8.0)
     # range of the truth is ~4.6 km: bounds of 8-20 km on track 2 make it a CTMA solution
-    assert mgr.set_bounds(_bounds_msg(track=2, r_min=8000.0)) == [2]
+    assert mgr.set_bounds(*bounds_from(_bounds_msg(track=2, r_min=8000.0))) == [2]
     out = feed(mgr, 1540.0, [btrack(1, 1540.0), btrack(2, 1540.0)])
     s1, s2 = out["solutions"]
     assert not s1["constrained"] and s1["bounds"][0] == 1000.0
     assert s2["constrained"] and s2["bounds"][0] == 8000.0 and s2["range"] >= 8000.0 - 1e-6
     assert s2["phase"] == "pre" and s2["residual_factor"] > 1.0
     with pytest.raises(Rejected, match="unknown_track"):
-        mgr.set_bounds(_bounds_msg(track=9))
+        mgr.set_bounds(*bounds_from(_bounds_msg(track=9)))
 
 
 def _support_msg(**kw: Any) -> dict[str, Any]:
@@ -247,7 +249,8 @@ def test_a_range_support_tightens_the_solution():
         if with_support:
             ox, oy = own_at(600.0)
             x, y = TARGET[:2] + TARGET[2:] * 600.0
-            mgr.add_support(_support_msg(t=600.0, value=math.hypot(x - ox, y - oy), obs_x=ox, obs_y=oy))
+            mgr.add_support(*support_from(_support_msg(t=600.0, value=math.hypot(x - ox, y - oy), obs_x=ox,
+                                                       obs_y=oy)))
         runs[with_support] = feed(mgr, 620.0, [btrack(1, 620.0), btrack(2, 620.0)])["solutions"]
     (a1, a2), (b1, b2) = runs[False], runs[True]
     assert _pos_sigma(b1) < 0.3 * _pos_sigma(a1)
@@ -267,13 +270,13 @@ def test_configured_course_and_speed_supports_reach_every_new_track():
 def test_support_messages_are_checked():
     mgr = TmaManager("a1")
     with pytest.raises(Rejected, match="unknown_track"):
-        mgr.add_support(_support_msg(track=9))
+        mgr.add_support(*support_from(_support_msg(track=9)))
     feed(mgr, 0.0, [btrack(1, 0.0)])
     msg = _support_msg()
     del msg["obs_x"]
     with pytest.raises(Rejected, match="bad_support"):
-        mgr.add_support(msg)
-    mgr.add_support(_support_msg(kind="speed", value=2.0, sigma=0.2, obs_x=None, obs_y=None))
+        mgr.add_support(*support_from(msg))
+    mgr.add_support(*support_from(_support_msg(kind="speed", value=2.0, sigma=0.2, obs_x=None, obs_y=None)))
     with pytest.raises(protocol.DecodeError) as e:
         protocol.decode("tma_support", msgpack.packb(_support_msg(kind="depth")))
     assert e.value.field == "kind"
@@ -310,11 +313,11 @@ def test_bounds_schema_requires_every_bound():
 ])
 def test_bounds_context_checks(change):
     with pytest.raises(Rejected, match="bad_bounds"):
-        make_bounds(_bounds_msg(**change))
+        bounds_from(_bounds_msg(**change))
 
 
 def test_course_bounds_wrap():
-    b = make_bounds(_bounds_msg(course_min=math.radians(300.0), course_max=math.radians(60.0)))
+    b, _ = bounds_from(_bounds_msg(course_min=math.radians(300.0), course_max=math.radians(60.0)))
     assert b.course_width == pytest.approx(math.radians(120.0))
 
 

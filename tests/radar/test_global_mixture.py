@@ -19,9 +19,9 @@ from common.radar.fusion.params import FusionParams
 from common.radar.geometry.bistatic import POS, bistatic_range, project
 from common.radar.plots.channel_fusion import Plots
 from common.sim.scenario import load_scenario
-from common.sim.simulator import run_scenario
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import gtracks_message
+from common.wire.sim_messages import run_scenario
 
 A, M = 3, 2
 DENSE = Path(__file__).resolve().parents[2] / "scenarios" / "dense.toml"

@@ -23,9 +23,8 @@ from common.radar.geometry.bistatic import POS, project
 from common.radar.geometry.localisation import Constraints, block_localise, gauss_newton
 from common.radar.plots.channel_fusion import Plots
 from common.sim.scenario import load_scenario, radar_scene
-from common.sim.simulator import run_scenario
 from common.wire.radar_chain import RadarChain
-from common.wire.sim_messages import truth_state
+from common.wire.sim_messages import run_scenario, truth_state
 
 REPO = Path(__file__).resolve().parents[2]
 DENSE = REPO / "scenarios" / "dense.toml"

@@ -13,9 +13,10 @@ from common.deploy.config import RadarBase, SonarArray, load
 from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.sim.mover import Mover
 from common.sim.scenario import SonarArraySim
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
 from common.sim.sonar import bearing_sigma
 from common.wire import protocol
+from common.wire.sim_messages import run_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 BASES = [

@@ -9,7 +9,8 @@ import numpy as np
 from common.deploy.config import RadarBase
 from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.radar.geometry.geodesy import LocalFrame
-from common.sim.simulator import load_scenario, run_scenario
+from common.sim.simulator import load_scenario
+from common.wire.sim_messages import run_scenario
 
 ORIGIN = {"lat": 47.0, "lon": 8.0, "alt": 450.0}
 BASES = [RadarBase("b1", np.array([-75e3, 60e3, -270.0]), np.zeros(3), ["c1"], 1),

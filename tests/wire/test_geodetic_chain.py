@@ -12,9 +12,9 @@ import pytest
 
 from common.deploy.config import load
 from common.sim.scenario import load_scenario
-from common.sim.simulator import run_scenario
 from common.wire import protocol
 from common.wire.radar_chain import RadarChain
+from common.wire.sim_messages import run_scenario
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "geodetic_two_targets.toml"
 XYZ = [0, 2, 4]

@@ -1,6 +1,10 @@
 """Per-array TMA bookkeeping behind ``pfusion tma``: one :class:`~common.sonar.tma.constrained.TmaTracker`
-per confirmed bearing track (seeds 002 and 003), fed from decoded btracks and history
-messages; pure (no Zenoh, no clock: driven by message time only).
+per confirmed bearing track (seeds 002 and 003), fed from the bearing tracker's cycles and
+registers; pure (no Zenoh, no clock: driven by message time only).
+
+Typed boundary: btracks cycles come in as :class:`BTracks`, history replies as
+:class:`TrackHistory`, and each cycle leaves as a :class:`TmaReport`; common.wire.sonar_messages
+builds and parses the messages.
 
 Bearings: the detections the bearing tracker associated with the track, with their
 sigmas and own-ship positions, from its bearing register (the history queryable,
@@ -20,7 +24,7 @@ from __future__ import annotations
 from collections import OrderedDict, deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -30,7 +34,45 @@ from common.sonar.tma.bearings_only import Support
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.sonar.tma.constrained import CtmaParams, CycleOutput, TmaTracker
 
-VERSION = 1
+
+@dataclass(frozen=True)
+class BTrack:
+    """One track of a seed 000 btracks cycle as TMA reads it: number, confirmed or not,
+    state x (bearing first) and covariance P flattened row by row."""
+
+    id: int
+    confirmed: bool
+    x: np.ndarray
+    P: np.ndarray
+
+
+@dataclass(frozen=True)
+class BTracks:
+    """One seed 000 btracks cycle of an array: its time and tracks, in message order."""
+
+    t: float
+    array: str
+    tracks: list[BTrack]
+
+
+@dataclass(frozen=True)
+class TrackHistory:
+    """The seed 000 bearing register of one track as served: number, status ("confirmed"
+    or "deleted") and rows (n, 5) t, brg, sbrg, own_x, own_y in served order."""
+
+    id: int
+    status: str
+    rows: np.ndarray
+
+
+@dataclass(frozen=True)
+class TmaReport:
+    """One TMA cycle of an array (seeds 002, 003): the latest solution of every live
+    track, as (track number, cycle output) in track order."""
+
+    t: float
+    array: str
+    solutions: list[tuple[int, CycleOutput]]
 
 
 @dataclass(frozen=True)
@@ -87,15 +129,6 @@ class SupportParams(Params):
         return out
 
 
-def make_support(msg: Mapping[str, Any]) -> Support:
-    """A :class:`Support` from a decoded support message; a range needs obs_x, obs_y."""
-    obs = (msg.get("obs_x"), msg.get("obs_y"))
-    if msg["kind"] == "range" and None in obs:
-        raise Rejected("bad_support", "a range support needs obs_x and obs_y")
-    xy = (float(obs[0]), float(obs[1])) if None not in obs else (0.0, 0.0)
-    return Support(msg["kind"], float(msg["value"]), float(msg["sigma"]), float(msg["t"]), xy)
-
-
 BOUNDS_FIELDS = ("r_min", "r_max", "course_min", "course_max", "speed_min", "speed_max")
 
 
@@ -125,13 +158,12 @@ class BoundsParams(Params):
     RULES: ClassVar[tuple[Rule, ...]] = (order("r_min", "r_max"), order("speed_min", "speed_max"))
 
 
-def make_bounds(p: BoundsParams | Mapping[str, Any]) -> Bounds:
-    """Checked :class:`Bounds` from BoundsParams or a decoded bounds message.
+def make_bounds(p: BoundsParams) -> Bounds:
+    """Checked seed 003 :class:`Bounds` (of the configuration or of a bounds message).
 
     Requires 0 <= r_min < r_max, 0 <= speed_min < speed_max, courses in [0, 2 pi].
     """
-    get = (lambda k: getattr(p, k)) if isinstance(p, BoundsParams) else p.__getitem__
-    r0, r1, k0, k1, v0, v1 = (float(get(k)) for k in BOUNDS_FIELDS)
+    r0, r1, k0, k1, v0, v1 = (float(getattr(p, k)) for k in BOUNDS_FIELDS)
     if not all(np.isfinite((r0, r1, k0, k1, v0, v1))):
         raise Rejected("bad_bounds", "bounds must be finite")
     if not 0.0 <= r0 < r1:
@@ -204,8 +236,8 @@ class TmaManager:
     """TMA of every confirmed bearing track of one array.
 
     Use: :meth:`add_own` per detections message, :meth:`push` per btracks message, then
-    for each message from :meth:`ready`: :meth:`history_wanted` (the tracks whose history
-    the caller fetches), :meth:`step` (returns the tma message).
+    for each cycle from :meth:`ready`: :meth:`history_wanted` (the tracks whose history
+    the caller fetches), :meth:`step` (returns the TMA report).
     """
 
     def __init__(self, array: str, params: TmaParams = TmaParams(), bounds: Bounds = MINIMAL_BOUNDS,
@@ -217,7 +249,7 @@ class TmaManager:
         self.config = config
         self.tracks: dict[int, TrackTma] = {}
         self.own: OrderedDict[float, tuple[float, float]] = OrderedDict()
-        self.pending: deque[dict[str, Any]] = deque()
+        self.pending: deque[BTracks] = deque()
         self.t_pushed = -np.inf
         self.cycles = 0
 
@@ -227,29 +259,29 @@ class TmaManager:
         while len(self.own) > self.params.own_keep:
             self.own.popitem(last=False)
 
-    def push(self, msg: Mapping[str, Any]) -> None:
-        """Queue a decoded btracks message after checking it (time order, array, P)."""
-        if msg["array"] != self.array:
-            raise Rejected("unknown_array", f"array '{msg['array']}'")
-        if not msg["t"] > self.t_pushed:
-            raise Rejected("time_order", f"t={msg['t']} is not after t={self.t_pushed}")
-        for tr in msg["tracks"]:
-            n = len(tr["x"])
-            if n < 2 or len(tr["P"]) != n * n or not tr["P"][0] > 0:
-                raise Rejected("bad_btrack", f"track {tr['id']}: x needs >= 2 entries, P n*n, P[0] > 0")
-            if not 0.0 <= tr["x"][0] <= TWO_PI:
-                raise Rejected("bad_btrack", f"track {tr['id']}: bearing x[0] not in [0, 2pi]")
-        self.t_pushed = msg["t"]
-        self.pending.append(dict(msg))
+    def push(self, b: BTracks) -> None:
+        """Queue a btracks cycle after checking it (array, time order, x and P)."""
+        if b.array != self.array:
+            raise Rejected("unknown_array", f"array '{b.array}'")
+        if not b.t > self.t_pushed:
+            raise Rejected("time_order", f"t={b.t} is not after t={self.t_pushed}")
+        for tr in b.tracks:
+            n = len(tr.x)
+            if n < 2 or len(tr.P) != n * n or not tr.P[0] > 0:
+                raise Rejected("bad_btrack", f"track {tr.id}: x needs >= 2 entries, P n*n, P[0] > 0")
+            if not 0.0 <= tr.x[0] <= TWO_PI:
+                raise Rejected("bad_btrack", f"track {tr.id}: bearing x[0] not in [0, 2pi]")
+        self.t_pushed = b.t
+        self.pending.append(b)
 
-    def ready(self) -> tuple[list[dict[str, Any]], int]:
-        """Queued btracks messages whose own-ship position is known (in time order), and the
+    def ready(self) -> tuple[list[BTracks], int]:
+        """Queued btracks cycles whose own-ship position is known (in time order), and the
         number dropped because it never came (a later one did, or the queue overflowed)."""
-        out: list[dict[str, Any]] = []
+        out: list[BTracks] = []
         dropped = 0
         latest = next(reversed(self.own)) if self.own else -np.inf
         while self.pending:
-            t = self.pending[0]["t"]
+            t = self.pending[0].t
             if t in self.own:
                 out.append(self.pending.popleft())
             elif latest > t or len(self.pending) > self.params.max_pending:
@@ -259,22 +291,20 @@ class TmaManager:
                 break
         return out, dropped
 
-    def history_wanted(self, msg: Mapping[str, Any]) -> list[int]:
-        """Confirmed tracks of ``msg`` whose history the caller fetches before :meth:`step`:
+    def history_wanted(self, b: BTracks) -> list[int]:
+        """Confirmed tracks of ``b`` whose history the caller fetches before :meth:`step`:
         those without a TmaTracker yet and those whose TMA cycle is due."""
-        t = msg["t"]
-        return [tr["id"] for tr in msg["tracks"] if tr["status"] == "confirmed"
-                and (tr["id"] not in self.tracks or t - self.tracks[tr["id"]].t_cycle >= self.params.cycle_dt)]
+        return [tr.id for tr in b.tracks if tr.confirmed
+                and (tr.id not in self.tracks or b.t - self.tracks[tr.id].t_cycle >= self.params.cycle_dt)]
 
-    def step(self, msg: Mapping[str, Any], histories: Mapping[int, Mapping[str, Any] | None]) -> dict[str, Any]:
-        """Process one btracks message (own ship known) and return the tma message.
+    def step(self, b: BTracks, histories: Mapping[int, TrackHistory | None]) -> TmaReport:
+        """Process one btracks cycle (own ship known) and return the TMA report.
 
-        Tracks no longer confirmed are dropped; a track given its history (a decoded
-        history message of the same track, confirmed) buffers the detections it has not
-        seen; due tracks run a cycle.
+        Tracks no longer confirmed are dropped; a track given its history (its own,
+        confirmed) buffers the detections it has not seen; due tracks run a cycle.
         """
-        t = msg["t"]
-        live = {tr["id"] for tr in msg["tracks"] if tr["status"] == "confirmed"}
+        t = b.t
+        live = {tr.id for tr in b.tracks if tr.confirmed}
         for tid in [k for k in self.tracks if k not in live]:
             del self.tracks[tid]
         for tid in live:
@@ -283,30 +313,29 @@ class TmaManager:
                 trk = self.tracks[tid] = TrackTma(TmaTracker(self.bounds, self.config))
                 trk.tracker.support.extend(self.support.supports(t))  # 002 claims 3-10
             h = histories.get(tid)
-            if h is not None and h["status"] == "confirmed" and h["id"] == tid:
-                rows = np.column_stack((h["t_hist"], h["brg"], h["sbrg"], h["own_x"], h["own_y"]))
+            if h is not None and h.status == "confirmed" and h.id == tid:
+                rows = h.rows
                 trk.add(rows[np.argsort(rows[:, 0], kind="stable")], self.params.sample_dt)
             self.cycles += trk.cycle(t, self.params.cycle_dt)
-        return self.message(t)
+        sols = [(tid, trk.out) for tid, trk in sorted(self.tracks.items()) if trk.out is not None]
+        return TmaReport(t, self.array, sols)
 
-    def add_support(self, msg: Mapping[str, Any]) -> None:
-        """Apply a decoded support message (002 claims 3-10) to its track: the value
-        enters every later TMA/CTMA solve of the track (unknown track: Rejected)."""
-        trk = self.tracks.get(msg["track"])
+    def add_support(self, track: int, s: Support) -> None:
+        """Give a support value (002 claims 3-10) to its track: the value enters every
+        later TMA/CTMA solve of the track (unknown track: Rejected)."""
+        trk = self.tracks.get(track)
         if trk is None:
-            raise Rejected("unknown_track", f"no TMA for track {msg['track']}")
-        trk.tracker.support.append(make_support(msg))
+            raise Rejected("unknown_track", f"no TMA for track {track}")
+        trk.tracker.support.append(s)
 
-    def set_bounds(self, msg: Mapping[str, Any]) -> list[int]:
-        """Apply a decoded bounds message; returns the tracks changed.
+    def set_bounds(self, b: Bounds, tid: int | None = None) -> list[int]:
+        """Apply seed 003 bounds; returns the tracks changed.
 
-        Without ``track``: the array's default for new tracks and every live track; with
+        Without ``tid``: the array's default for new tracks and every live track; with
         it: that live track only (unknown track: Rejected). The bounds are those of the
         track's current target leg: after a manoeuvre they bound the new leg, and the
         earlier legs keep the bounds they had (003 claim 9), so the message needs no leg.
         """
-        b = make_bounds(msg)
-        tid = msg.get("track")
         if tid is None:
             self.bounds = b
             ids = list(self.tracks)
@@ -317,22 +346,3 @@ class TmaManager:
         for i in ids:
             self.tracks[i].tracker.bounds = b
         return ids
-
-    def message(self, t: float) -> dict[str, Any]:
-        """The tma message: the latest solution of every live track (docs/protocol.md)."""
-        sols = [solution(tid, trk.out) for tid, trk in sorted(self.tracks.items()) if trk.out is not None]
-        return {"v": VERSION, "t": t, "array": self.array, "solutions": sols}
-
-
-def solution(track: int, c: CycleOutput) -> dict[str, Any]:
-    """One solution entry: state (m, m/s) and P at c.t, range/course/speed, CTMA status."""
-    b = c.bounds or MINIMAL_BOUNDS
-    return {
-        "track": track, "t": c.t, "x": c.x, "y": c.y, "vx": c.vx, "vy": c.vy,
-        "P": np.asarray(c.P, float).reshape(-1).tolist(),
-        "range": c.range, "course": c.course, "speed": c.speed,
-        "constrained": c.constrained,
-        "bounds": [b.r_min, b.r_max, b.k_min, b.k_max, b.v_min, b.v_max],
-        "bounds_modified": c.bounds_modified, "phase": c.phase,
-        "residual_factor": c.residual_factor, "legs": list(c.legs),
-    }
