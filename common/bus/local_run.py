@@ -63,9 +63,10 @@ class Collector:
             self.by_key.setdefault(env.key, []).append(msg)
 
     def of(self, suffix: str) -> list[dict[str, Any]]:
-        """The messages of root/suffix received so far, in order."""
+        """The messages of root/suffix received so far, in arrival order (a copy of the
+        per-key list: polled by wait predicates, it does not rescan every message)."""
         self.drain()
-        return self.by_key.get(f"{ROOT}/{suffix}", [])
+        return list(self.by_key.get(f"{ROOT}/{suffix}", ()))
 
     def close(self) -> None:
         """Undeclare the subscribers and the token (the session stays open)."""
@@ -190,6 +191,5 @@ class Deployment:
             time.sleep(0.05)
 
     def of(self, key_suffix: str) -> list[dict[str, Any]]:
-        """Decoded messages received on root/key_suffix, in arrival order (a copy of the
-        per-key list: polled by `wait_for` predicates, it does not rescan every message)."""
-        return list(self.by_key.get(f"{ROOT}/{key_suffix}", ()))
+        """``Collector.of`` of the deployment's collector."""
+        return self.collector.of(key_suffix)
