@@ -28,6 +28,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from common.core.angles import wrap_2pi
 from common.evaluation.metrics import gospa
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
 from common.sonar.trackers import bearing_tracker
@@ -60,7 +61,7 @@ def scenario(N: int, seed: int = 0) -> list[tuple[float, np.ndarray, np.ndarray,
         nc = rng.poisson(N / 2)
         brg = np.concatenate([brg, rng.uniform(0.0, 2 * math.pi, nc)])
         lvl = np.concatenate([lvl, 3.0 + rng.exponential(2.0, nc)])
-        out.append((t, np.mod(brg, 2 * math.pi), 10.0 ** (lvl / 10.0), truth))
+        out.append((t, wrap_2pi(brg), 10.0 ** (lvl / 10.0), truth))
     return out
 
 

@@ -15,6 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from common.core import gating, kalman, motion
+from common.core.angles import wrap_2pi
 from common.core.assignment import gnn, nearest_neighbour
 
 H = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11]
@@ -45,7 +46,7 @@ def scenario(N: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, 
     z_pred = np.repeat(centres, 3, axis=0)[:N] + rng.normal(size=(N, 3)) * spread
     S = np.tile(2.0 * R, (N, 1, 1))
     z = z_pred + rng.normal(size=(N, 3)) * np.sqrt(np.diag(2.0 * R))
-    z[:, 2] %= 2 * np.pi
+    z[:, 2] = wrap_2pi(z[:, 2])
     return z_pred, S, z
 
 

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from common.core.angles import wrap_360
+
 REPO = Path(__file__).resolve().parents[1]
 
 HEADER = """# Dense air picture of issue 14: {n} aircraft 10-60 km from the receiver, 1-10 km up,
@@ -117,7 +119,7 @@ def targets(n: int, seed: int) -> str:
             rate = rng.choice([-1, 1]) * rng.uniform(1.0, 3.0)
             turn = rate * rng.uniform(20, 60)
             lines += ["", "[[sim.radar.target.leg]]", f"t = {t:.0f}.0",
-                      f"course_deg = {(course[i] + turn) % 360:.1f}", f"turn_rate_deg = {rate:.2f}"]
+                      f"course_deg = {wrap_360(course[i] + turn):.1f}", f"turn_rate_deg = {rate:.2f}"]
         out.append("\n".join(lines))
     return "\n\n".join(out) + "\n"
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from common.bus.local_run import Deployment
+from common.core.angles import wrap_2pi
 from common.deploy.config import load, section
 from common.evaluation.pcrlb import Evaluation, score_targets
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
@@ -56,7 +57,7 @@ def core_benchmark(n: int, cycles: int = 40) -> tuple[float, float, float]:
         for b in cfg.bases:
             y = project(s, b.tx, b.rx) + rng.standard_normal((n, 3)) * SIG
             sig = np.tile(SIG, (n, 1))
-            r = trk[b.id].step(float(k), Plots(y[:, 0], y[:, 1], y[:, 2] % (2 * np.pi), sig[:, 0],
+            r = trk[b.id].step(float(k), Plots(y[:, 0], y[:, 1], wrap_2pi(y[:, 2]), sig[:, 0],
                                                sig[:, 1], sig[:, 2], np.full(n, 3)))
             msgs.append((b.id, r))
         for m in msgs[:-1]:

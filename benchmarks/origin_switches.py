@@ -25,7 +25,7 @@ from collections import Counter
 import numpy as np
 
 from common.core.angles import wrap_pi
-from common.core.gating import chi2_gate
+from common.core.gating import chi2_gate, mahalanobis_sq
 from common.evaluation.metrics import count_switches
 from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.assoc import YR
@@ -51,14 +51,14 @@ class OriginLabels:
         if len(tracks) == 0 or truth_ids.size == 0:
             return
         y = tracks.x[:, YR]
-        Ri = np.linalg.inv(tracks.P[:, YR][:, :, YR])
+        R = tracks.P[:, YR][:, :, YR]
         g = project(truth_x, self.tx[b], self.rx[b])
         best = np.full(len(tracks), np.inf)
         arg = np.zeros(len(tracks), dtype=np.intp)
         for j0 in range(0, g.shape[0], 256):
             d = g[None, j0:j0 + 256] - y[:, None]
             d[..., 2] = wrap_pi(d[..., 2])
-            m = np.einsum("eti,eij,etj->et", d, Ri, d)
+            m = mahalanobis_sq(d, R)
             a = m.argmin(axis=1)
             v = m[np.arange(len(tracks)), a]
             better = v < best

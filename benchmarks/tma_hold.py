@@ -51,6 +51,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from common.core.angles import wrap_2pi  # noqa: E402
+from common.core.gating import quadratic_form  # noqa: E402
 from common.evaluation.pcrlb import mean_nees_interval  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.tma.bounds import MINIMAL_BOUNDS  # noqa: E402
@@ -93,7 +95,7 @@ def filtered(t: np.ndarray, z: np.ndarray, sig: float) -> tuple[np.ndarray, np.n
     tr = bearing_tracker(SonarTrackerParams(mode="broadband", crossing=False), MhtParams(), "cylindrical", sig)
     b, s = np.empty(t.size), np.empty(t.size)
     for k in range(t.size):
-        c = tr.step(t[k], np.array([z[k] % (2 * math.pi)]), np.array([100.0]), 0.0)
+        c = tr.step(t[k], np.array([wrap_2pi(z[k])]), np.array([100.0]), 0.0)
         first = int(np.argmin(c.ids))
         b[k], s[k] = c.x[first, 0], math.sqrt(c.P[first, 0, 0])
     return b, s
@@ -108,7 +110,7 @@ def mht_register(t: np.ndarray, z: np.ndarray, sig: float, own: np.ndarray
     tr = bearing_tracker(SonarTrackerParams(mode="broadband", mode_association="mht"), MhtParams(),
                          "cylindrical", sig)
     for k in range(t.size):
-        c = tr.step(t[k], np.array([z[k] % (2 * math.pi)]), np.array([100.0]), 0.0,
+        c = tr.step(t[k], np.array([wrap_2pi(z[k])]), np.array([100.0]), 0.0,
                     own_x=own[k, 0], own_y=own[k, 1])
     found = tr.history_of(int(c.ids[c.confirmed][0]))
     assert found is not None
@@ -135,7 +137,7 @@ def run(name: str, runs: int) -> tuple[dict[str, np.ndarray], float]:
             c = TmaTracker(MINIMAL_BOUNDS).update(tf, b, s, of)
             e = np.array([c.x, c.y, c.vx, c.vy]) - x_true
             P = np.asarray(c.P, float).reshape(4, 4)
-            out[feed].append((float(np.hypot(e[0], e[1])), float(e @ np.linalg.solve(P, e))))
+            out[feed].append((float(np.hypot(e[0], e[1])), float(quadratic_form(e, P))))
     return {k: np.array(v) for k, v in out.items()}, bound
 
 

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from common.core.angles import wrap_2pi
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, Bounds
 from common.sonar.tma.manager import TmaManager, TmaParams
 from common.wire.sonar_messages import btracks_from, tma_message
@@ -48,7 +49,7 @@ def messages(seed: int = 0) -> list[tuple[float, np.ndarray, list[dict]]]:
     out = []
     for i, t in enumerate(times):
         d = p0 + vel * t - own[i]
-        brg = (np.arctan2(d[:, 0], d[:, 1]) + SIG * rng.standard_normal(N_TRACKS)) % (2 * np.pi)
+        brg = wrap_2pi(np.arctan2(d[:, 0], d[:, 1]) + SIG * rng.standard_normal(N_TRACKS))
         tracks = [{"id": j, "status": "confirmed", "x": [float(brg[j]), 0.0, 20.0, 0.0], "P": P,
                    "quality": 5.0, "ambiguous": False} for j in range(N_TRACKS)]
         out.append((float(t), own[i], {"v": 1, "t": float(t), "array": "a1", "tracks": tracks}))

@@ -1,6 +1,7 @@
 """A local run of the real processes, for tests and benchmarks: a real ``pfusion router``
 on a free loopback port, real services as child processes, and an in-process collector
-of decoded messages (tests/harness.py re-exports it with the repository's paths)."""
+of decoded messages (``Collector``, also used alone on a run's router; tests/harness.py
+re-exports the Deployment with the repository's paths)."""
 
 from __future__ import annotations
 
@@ -21,6 +22,61 @@ from common.wire.protocol import kind_of
 ROOT = "pf/v1"
 
 
+class Collector:
+    """Decoded messages of key expressions under the root on a session, in ``messages``
+    and per key in ``by_key``, with the liveliness token ``<root>/alive/<name>`` that a
+    simulator may wait for; raises on invalid data, counts lost samples in ``losses``."""
+
+    def __init__(self, session: Any, name: str = "test/collector") -> None:
+        self.session, self.name = session, name
+        self.inbox = Inbox()
+        self.messages: list[tuple[str, dict[str, Any]]] = []
+        self.by_key: dict[str, list[dict[str, Any]]] = {}
+        self.losses = LossCount(logging.getLogger("collector"))
+        self._subs: list[Any] = []
+        self._token: Any = None
+
+    @property
+    def announced(self) -> bool:
+        return self._token is not None
+
+    def subscribe(self, keyexpr: str) -> None:
+        """Subscribe to root/keyexpr (before the data starts)."""
+        self._subs.append(self.session.declare_subscriber(f"{ROOT}/{keyexpr}", self.inbox.on_sample))
+        self.announce()
+
+    def announce(self) -> None:
+        """(Re)declare the liveliness token after the latest subscription, so a simulator
+        that waits for it never publishes before the collector listens."""
+        if self._token is not None:
+            self._token.undeclare()
+        self._token = self.session.liveliness().declare_token(f"{ROOT}/alive/{self.name}")
+
+    def drain(self) -> None:
+        """Decode everything received so far into ``messages`` and ``by_key`` and count
+        the samples that never arrived in ``losses`` (raises on invalid data)."""
+        while (env := self.inbox.get(0.0)) is not None:
+            self.losses.check(env.key, env.attachment)
+            kind = kind_of(env.key, ROOT)
+            msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
+            self.messages.append((env.key, msg))
+            self.by_key.setdefault(env.key, []).append(msg)
+
+    def of(self, suffix: str) -> list[dict[str, Any]]:
+        """The messages of root/suffix received so far, in arrival order (a copy of the
+        per-key list: polled by wait predicates, it does not rescan every message)."""
+        self.drain()
+        return list(self.by_key.get(f"{ROOT}/{suffix}", ()))
+
+    def close(self) -> None:
+        """Undeclare the subscribers and the token (the session stays open)."""
+        for s in self._subs:
+            s.undeclare()
+        if self._token is not None:
+            self._token.undeclare()
+        self._subs, self._token = [], None
+
+
 class Deployment:
     """Router + children + collector; stops everything on exit and prints child logs
     of a failed test (pytest shows them)."""
@@ -30,12 +86,7 @@ class Deployment:
         self.router, self.endpoint = start_router(log=logdir / "router.log")
         self.children: list[Child] = []
         self.session = open_session(ZenohConfig([self.endpoint], [], ROOT))
-        self.inbox = Inbox()
-        self.messages: list[tuple[str, dict[str, Any]]] = []
-        self.by_key: dict[str, list[dict[str, Any]]] = {}  # the same messages per key, for `of`
-        self.losses = LossCount(logging.getLogger("collector"))
-        self._subs: list[Any] = []
-        self._token: Any = None
+        self.collector = Collector(self.session)
 
     def __enter__(self) -> "Deployment":
         return self
@@ -44,10 +95,7 @@ class Deployment:
                  tb: TracebackType | None) -> None:
         for c in reversed(self.children):
             c.stop()
-        for s in self._subs:
-            s.undeclare()
-        if self._token is not None:
-            self._token.undeclare()
+        self.collector.close()
         self.session.close()
         self.router.stop()
         if exc is not None:
@@ -69,17 +117,25 @@ class Deployment:
             self.start(spec.name.replace("/", "-"), *spec.argv)
         return [spec.alive for spec in specs]
 
+    @property
+    def messages(self) -> list[tuple[str, dict[str, Any]]]:
+        return self.collector.messages
+
+    @property
+    def by_key(self) -> dict[str, list[dict[str, Any]]]:
+        return self.collector.by_key
+
+    @property
+    def losses(self) -> LossCount:
+        return self.collector.losses
+
     def collect(self, keyexpr: str) -> None:
         """Subscribe the collector to root/keyexpr (before the data starts)."""
-        self._subs.append(self.session.declare_subscriber(f"{ROOT}/{keyexpr}", self.inbox.on_sample))
-        self.announce()
+        self.collector.subscribe(keyexpr)
 
     def announce(self) -> None:
-        """(Re)declare the collector's liveliness token after its latest subscription, so
-        a simulator that waits for ``test/collector`` never publishes before it listens."""
-        if self._token is not None:
-            self._token.undeclare()
-        self._token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
+        """(Re)declare the collector's liveliness token ``test/collector``."""
+        self.collector.announce()
 
     def wait_alive(self, names: list[str], timeout: float = 60.0) -> None:
         """Block until every root/alive/<name> token exists (a service is subscribed)."""
@@ -99,7 +155,7 @@ class Deployment:
         """Run the simulator to completion (waiting for ``wait_alive`` services first);
         `repeat` runs with seeds seed, seed + 1, ... separated by `gap` target-free
         seconds (``pfusion simulate --repeat --gap``)."""
-        if self._token is None:
+        if not self.collector.announced:
             self.announce()
         args = ["simulate", "--config", str(scenario), "--scenario", str(scenario),
                 "--seed", str(seed), "--wait-alive", "test/collector"]
@@ -120,14 +176,8 @@ class Deployment:
         return sim
 
     def drain(self) -> None:
-        """Decode everything received so far into ``messages`` and count the samples
-        that never arrived in ``losses`` (raises on invalid data)."""
-        while (env := self.inbox.get(0.0)) is not None:
-            self.losses.check(env.key, env.attachment)
-            kind = kind_of(env.key, ROOT)
-            msg = protocol.decode(kind, env.payload) if kind else protocol.unpack(env.payload)
-            self.messages.append((env.key, msg))
-            self.by_key.setdefault(env.key, []).append(msg)
+        """``Collector.drain`` of the deployment's collector."""
+        self.collector.drain()
 
     def wait_for(self, predicate: Callable[[], bool], timeout: float = 60.0) -> None:
         """Drain until ``predicate()`` holds (e.g. the last scan's tracks arrived)."""
@@ -141,6 +191,5 @@ class Deployment:
             time.sleep(0.05)
 
     def of(self, key_suffix: str) -> list[dict[str, Any]]:
-        """Decoded messages received on root/key_suffix, in arrival order (a copy of the
-        per-key list: polled by `wait_for` predicates, it does not rescan every message)."""
-        return list(self.by_key.get(f"{ROOT}/{key_suffix}", ()))
+        """``Collector.of`` of the deployment's collector."""
+        return self.collector.of(key_suffix)

@@ -1,5 +1,6 @@
-"""Angles in radians: the one TWO_PI and the one wrap of each range ([-pi, pi) and
-[0, 2pi)), for scalars and numpy arrays. Every module wraps with these."""
+"""Angles: the one TWO_PI and the one wrap of each range ([-pi, pi) and [0, 2pi) in
+radians, [0, 360) in degrees), for scalars and numpy arrays. Every module wraps with
+these."""
 
 from __future__ import annotations
 
@@ -29,4 +30,11 @@ def wrap_2pi(a: ArrayLike) -> np.ndarray | float:
     w = np.mod(np.asarray(a, dtype=float), TWO_PI)
     # np.mod can round a tiny negative input up to exactly 2pi.
     w = np.where(w >= TWO_PI, 0.0, w)
+    return float(w) if w.ndim == 0 else w
+
+
+def wrap_360(a: ArrayLike) -> np.ndarray | float:
+    """Wrap angles in degrees to [0, 360); a scalar in gives a float out."""
+    w = np.mod(np.asarray(a, dtype=float), 360.0)
+    w = np.where(w >= 360.0, 0.0, w)  # as wrap_2pi
     return float(w) if w.ndim == 0 else w

@@ -6,6 +6,7 @@ and gate G. Every tracker gates through ``pair_distances``: a cheap prefilter of
 (t, j), and this one batched function gives their innovations, S and d^2; the tracker
 then compares d^2 with its threshold (``gate``). The dense N x M forms
 (``pairwise_innovations``, ``mahalanobis_sq``) serve the MHT mode and the tests.
+``quadratic_form`` is the one y' S^-1 y of the code base outside this package.
 """
 
 from __future__ import annotations
@@ -28,6 +29,13 @@ def pairwise_innovations(
     for i in angle_idx:
         y[..., i] = wrap_pi(y[..., i])
     return y
+
+
+def quadratic_form(y: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """d2 = y' S^-1 y (001 [8], 000 d^2) over the leading axes of y (..., m) and S
+    (..., m, m), broadcast against each other, by one batched solve; a 1-D y gives a
+    0-d array."""
+    return np.einsum("...i,...i->...", y, np.linalg.solve(S, y[..., None])[..., 0])
 
 
 def mahalanobis_sq(y: np.ndarray, S: np.ndarray) -> np.ndarray:
@@ -64,10 +72,7 @@ def pair_distances(
         S[:, d, d] += R[j]
     else:
         S += R[j]
-    if y.shape[0] == 0:
-        return y, S, np.zeros(0)
-    d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])  # 001 [8]
-    return y, S, d2
+    return y, S, quadratic_form(y, S)  # 001 [8]
 
 
 def overlap_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

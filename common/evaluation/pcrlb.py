@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from scipy.special import gammaincinv
 
+from common.core.gating import quadratic_form
 from common.core.motion import cv_F, cv_Q
 from common.evaluation.metrics import MetricsAccumulator
 from common.radar.geometry.bistatic import POS, project_jacobian
@@ -78,7 +79,7 @@ def pcrlb(
 
 def nees(err: np.ndarray, P: np.ndarray) -> np.ndarray:
     """Normalised estimation error squared e' P^-1 e for errors (M, n), P (M, n, n)."""
-    return np.einsum("mi,mi->m", err, np.linalg.solve(P, err[..., None])[..., 0])
+    return quadratic_form(err, P)
 
 
 def mean_nees_interval(dof: int, samples: int, prob: float = 0.95) -> tuple[float, float]:

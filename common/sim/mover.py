@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.core.angles import TWO_PI, wrap_2pi
+from common.core.angles import wrap_2pi
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ class Mover:
                 segs.append(Segment(leg.t, pos[0], course, speed, vz, leg.turn_rate))
             else:
                 turn = math.copysign(1.0, leg.turn_rate)
-                dur = ((leg.course - course) * turn) % TWO_PI / abs(leg.turn_rate)
+                dur = wrap_2pi((leg.course - course) * turn) / abs(leg.turn_rate)
                 segs.append(Segment(leg.t, pos[0], course, speed, vz, leg.turn_rate))
                 end_pos, _, _ = _eval(segs, np.array([leg.t + dur]))
                 segs.append(Segment(leg.t + dur, end_pos[0], leg.course, speed, vz, 0.0))

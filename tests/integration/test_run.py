@@ -7,18 +7,16 @@ import os
 import re
 import signal
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 
+from common.bus import local_run
 from common.bus.procs import pfusion_argv
-from common.bus.transport import Inbox, free_port, open_session, wait_port
+from common.bus.transport import free_port, open_session, wait_port
 from common.cli import COMMANDS
 from common.deploy.config import ConfigError, ZenohConfig, load, parse
 from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
-from common.wire import protocol
-from common.wire.protocol import kind_of
 from tests.harness import Terminal
 
 REPO = Path(__file__).resolve().parents[2]
@@ -101,31 +99,19 @@ class Run(Terminal):
         return self.ctrl_c(timeout)
 
 
-class Collector:
-    """Decoded messages of the run's router, with a liveliness token for --wait-alive."""
+class Collector(local_run.Collector):
+    """The shared collector on the run's router (its own session), subscribed to keys."""
 
     def __init__(self, endpoint: str, keys: list[str]) -> None:
         port = loopback_port(endpoint)
         assert port is not None
         wait_port(port, 30)
-        self.session = open_session(ZenohConfig([endpoint], [], ROOT))
-        self.inbox = Inbox()
-        self.subs = [self.session.declare_subscriber(f"{ROOT}/{k}", self.inbox.on_sample) for k in keys]
-        self.token = self.session.liveliness().declare_token(f"{ROOT}/alive/test/collector")
-        self.messages: list[tuple[str, dict[str, Any]]] = []
-
-    def drain(self) -> None:
-        while (env := self.inbox.get(0.0)) is not None:
-            self.messages.append((env.key, protocol.decode(kind_of(env.key, ROOT), env.payload)))
-
-    def of(self, suffix: str) -> list[dict[str, Any]]:
-        self.drain()
-        return [m for k, m in self.messages if k == f"{ROOT}/{suffix}"]
+        super().__init__(open_session(ZenohConfig([endpoint], [], ROOT)))
+        for k in keys:
+            self.subscribe(k)
 
     def close(self) -> None:
-        for s in self.subs:
-            s.undeclare()
-        self.token.undeclare()
+        super().close()
         self.session.close()
 
 

@@ -203,15 +203,16 @@ def test_gate_equals_the_exact_test_of_every_pair_with_its_own_r():
     Pp = np.stack([np.diag([rng.uniform(0.2, 2) * DEG**2, 1e-8, rng.uniform(1, 4), 1e-3]) for _ in range(30)])
     z = np.column_stack([rng.uniform(0.95, 1.25, 40), rng.uniform(5, 18, 40)])
     Rd = np.column_stack([(rng.uniform(0.3, 3.0, 40) * DEG) ** 2, np.full(40, 4.0)])
-    hi, lj, y, S = trk._gate(xp, Pp, z, Rd)
+    hi, lj, y, S, d2 = trk._gate(xp, Pp, z, Rd)
     want = set()
     for h in range(30):
         for m in range(40):
             yy = z[m] - xp[h, [0, 2]]
             SS = Pp[h][np.ix_([0, 2], [0, 2])] + np.diag(Rd[m])
-            if yy @ np.linalg.solve(SS, yy) < 9.0:  # 000 y' S^-1 y < lambda^2
+            if yy @ np.linalg.solve(SS, yy) <= 9.0:  # 000 y' S^-1 y <= lambda^2
                 want.add((h, m))
     assert set(zip(hi.tolist(), lj.tolist())) == want and len(want) > 20
+    assert np.all(d2 <= 9.0) and d2.shape == hi.shape
 
 
 def _coalesced_pair(omega_brg: float | None, mains: tuple[float, float]) -> MhtTracker:

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import quadratic_form
 from common.core.motion import bistatic_F, bistatic_Q
 
 IDX = np.array([0, 1, 3])  # [r_b, v_b, theta] in [r_b, v_b, gamma_b, theta, omega]
@@ -92,7 +93,7 @@ def equivalent(
     dx[:, THETA] = wrap_pi(dx[:, THETA])
     v = (Rk @ (Ii[k] @ dx[..., None])[:, IDX])[..., 0]  # z_eq - H x~
     S = Pp[k][:, IDX][:, :, IDX] + Rk
-    nis = np.einsum("ni,ni->n", v, np.linalg.solve(S, v[..., None])[..., 0])
+    nis = quadratic_form(v, S)
     z[k] = xp[k][:, IDX] + v
     z[k, 2] = wrap_2pi(z[k, 2])
     R[k] = Rk

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from common.core import kalman
+from common.core.gating import quadratic_form
 from common.core.imm import gaussian_loglik
 from common.core.motion import cv_F, cv_Q
 from common.radar.geometry.bistatic import POS, project, project_jacobian
@@ -109,5 +110,5 @@ def _update(x: np.ndarray, P: np.ndarray, nu: np.ndarray, H: np.ndarray, R: np.n
             gain_scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """[58]-[62] on innovation nu, and the Gaussian log-likelihood of nu."""
     x_new, P_new, S, _ = kalman.update(x, P, nu, H, R, gain_scale=gain_scale)
-    nis = np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[..., None])[..., 0])
+    nis = quadratic_form(nu, S)
     return x_new, P_new, gaussian_loglik(nis, S)

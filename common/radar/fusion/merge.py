@@ -71,6 +71,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from common.core.gating import quadratic_form
 from common.core.track_table import TrackTable
 from common.radar.fusion.assoc import ETrackSet, gated_component_pairs
 from common.radar.geometry.bistatic import POS
@@ -96,7 +97,7 @@ def duplicate_pairs(pos: np.ndarray, cov: np.ndarray, has: np.ndarray, gamma: fl
     ok = (has[a].any(axis=1) | has[b].any(axis=1)) & ~(has[a] & has[b]).any(axis=1)
     a, b = a[ok], b[ok]
     d = pos[a] - pos[b]
-    d2 = np.einsum("pi,pi->p", d, np.linalg.solve(cov[a] + cov[b], d[..., None])[..., 0])
+    d2 = quadratic_form(d, cov[a] + cov[b])
     ok = d2 <= gamma
     a, b, d2 = a[ok], b[ok], d2[ok]
     order = np.argsort(d2, kind="stable")

@@ -72,7 +72,7 @@ from __future__ import annotations
 import numpy as np
 
 from common.core import imm
-from common.core.gating import chi2_gate
+from common.core.gating import chi2_gate, quadratic_form
 from common.radar.fusion.assoc import ETrackSet
 from common.radar.fusion.initiation import InitParams, altitude_bands
 from common.radar.fusion.track_filter import MixtureFilter
@@ -95,7 +95,7 @@ def contradicted(x: np.ndarray, P: np.ndarray, xb: np.ndarray, Pb: np.ndarray, w
     d^2 = (p - p_a)' (P_pos + P_a,pos)^-1 (p - p_a) > gate for each."""
     e = x[:, None, POS] - xb[..., POS]
     S = P[:, None][..., POS, :][..., POS] + Pb[..., POS, :][..., POS]
-    d2 = np.einsum("nai,nai->na", e, np.linalg.solve(S, e[..., None])[..., 0])
+    d2 = quadratic_form(e, S)
     return np.all((d2 > gate) | (wb < w_min), axis=1)
 
 

@@ -41,6 +41,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from common.core.gating import quadratic_form
+
 PLAN_AXES = ((0, 1), (2, 3))  # (position, velocity) of x and y in [x vx y vy z vz]
 
 
@@ -62,7 +64,7 @@ def segment_pairs(x_old: np.ndarray, P_old: np.ndarray, tau: np.ndarray, x_new: 
         return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     d = x_new[None, :, :] - x_old[:, None, :]
     S = P_new[None] + (P_old + manoeuvre_envelope(tau, accel))[:, None]
-    d2 = np.einsum("ijk,ijk->ij", d, np.linalg.solve(S, d[..., None])[..., 0])
+    d2 = quadratic_form(d, S)
     ok = d2 <= gate
     ok &= (ok.sum(axis=1, keepdims=True) == 1) & (ok.sum(axis=0, keepdims=True) == 1)
     return np.nonzero(ok)

@@ -50,6 +50,7 @@ import numpy as np
 from scipy.special import erf
 
 from common.core.angles import wrap_pi
+from common.core.gating import quadratic_form
 from common.core.imm import gaussian_loglik
 from common.radar.geometry.bistatic import norm3
 
@@ -388,9 +389,9 @@ def linearised_position(
     post = x + (_inv_sym(info + J0) @ (g + (J0 @ (x_pred - x)[..., None])[..., 0])[..., None])[..., 0]
     res = d - (A @ (post - x)[..., None])[..., 0]
     e = post - x_pred
-    chi2 = (np.einsum("ni,ni->n", res, np.linalg.solve(R_eff, res[..., None])[..., 0])
+    chi2 = (quadratic_form(res, R_eff)
             + np.einsum("ni,ni->n", e, (J0 @ e[..., None])[..., 0]))
     nu = d - (A @ (x_pred - x)[..., None])[..., 0]
     S = A @ P_pred @ np.swapaxes(A, 1, 2) + R_eff
-    nis = np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[..., None])[..., 0])
+    nis = quadratic_form(nu, S)
     return z, 0.5 * (R + np.swapaxes(R, 1, 2)), chi2, post, gaussian_loglik(nis, S)

@@ -28,6 +28,7 @@ from collections.abc import Callable
 import numpy as np
 
 from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import quadratic_form
 from common.core.imm import combine, gaussian_loglik, mix, probabilities, transition
 from common.core.kalman import predict, update
 
@@ -74,7 +75,7 @@ class BearingImm:
                 xu, Pu, S, _ = update(xm[rows, j], Pm[rows, j], y, H, R, joseph=True, gain_scale=alpha)
                 xu[:, 0] = wrap_2pi(xu[:, 0])
                 xm[rows, j], Pm[rows, j] = xu, Pu
-                ll[:, j] = gaussian_loglik(np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0]), S)
+                ll[:, j] = gaussian_loglik(quadratic_form(y, S), S)
             moved = alpha > 0
             mu[rows[moved]] = probabilities(c[rows[moved]], ll[moved])
         return (mu, xm, Pm, *self.combined(mu, xm, Pm))

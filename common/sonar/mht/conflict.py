@@ -34,7 +34,8 @@ import math
 
 import numpy as np
 
-from common.core.angles import wrap_pi
+from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import quadratic_form
 from common.sonar.bearing.model import detection_probability
 
 LN_2PI = math.log(2.0 * math.pi)
@@ -52,7 +53,7 @@ def h_unresolved(X: np.ndarray, n: int) -> np.ndarray:
     t1, t2 = X[..., BRG], X[..., n + BRG]
     a1, a2 = X[..., AMP], X[..., n + AMP]
     sep = wrap_pi(t1 - t2)  # 000 y^u_1 = theta_i - theta_j
-    centre = np.mod(t1 + 0.5 * wrap_pi(t2 - t1), 2.0 * np.pi)  # 000 y^u_2
+    centre = wrap_2pi(t1 + 0.5 * wrap_pi(t2 - t1))  # 000 y^u_2
     level = 10.0 * np.log10(10.0 ** (a1 / 10.0) + 10.0 ** (a2 / 10.0))
     return np.stack([sep, centre, level], axis=-1)
 
@@ -72,7 +73,7 @@ def unscented(X: np.ndarray, P: np.ndarray, n: int, kappa: float = 0.0) -> tuple
     dz = Z - z0
     dz[:, :2] = wrap_pi(dz[:, :2])
     zm = z0 + w @ dz
-    zm[:2] = [wrap_pi(zm[0]), np.mod(zm[1], 2.0 * np.pi)]
+    zm[:2] = [wrap_pi(zm[0]), wrap_2pi(zm[1])]
     e = dz - (zm - z0)
     e[:, :2] = wrap_pi(e[:, :2])
     dx = pts - X
@@ -95,7 +96,7 @@ def joint_update(X: np.ndarray, P: np.ndarray, zm: np.ndarray, Pzz: np.ndarray,
     logp = 0.0
     if meas:
         Sm, ym = S[np.ix_(meas, meas)], y[meas]
-        logp = -0.5 * (ym @ np.linalg.solve(Sm, ym) + len(meas) * LN_2PI
+        logp = -0.5 * (quadratic_form(ym, Sm) + len(meas) * LN_2PI
                        + math.log(np.linalg.det(Sm)))
     return Xn, 0.5 * (Pn + Pn.T), logp
 
@@ -168,7 +169,7 @@ def _moment_match(comps: list[tuple[int, np.ndarray, np.ndarray, float]], total:
         xm = ref + (w / s) @ d
         e = d - (xm - ref)
         Pm = sum(wi / s * (c[2] + np.outer(ei, ei)) for wi, c, ei in zip(w, sel, e))
-        xm[BRG] = np.mod(xm[BRG], 2.0 * np.pi)
+        xm[BRG] = wrap_2pi(xm[BRG])
         out[key] = (xm, Pm, s / total)
     return out
 

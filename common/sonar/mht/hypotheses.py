@@ -23,7 +23,8 @@ import math
 
 import numpy as np
 
-from common.core.angles import wrap_pi
+from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import quadratic_form
 
 LN_2PI = math.log(2.0 * math.pi)
 
@@ -39,7 +40,7 @@ def pair_distance2(xa: np.ndarray, Pa: np.ndarray, xb: np.ndarray, Pb: np.ndarra
     """000 d^2 = (x_a - x_b)' (P_a + P_b)^-1 (x_a - x_b), batched over pairs (split,
     track merge and hypothesis merge use the same formula)."""
     d = state_diff(xa, xb)
-    return np.einsum("ki,ki->k", d, np.linalg.solve(Pa + Pb, d[..., None])[..., 0])
+    return quadratic_form(d, Pa + Pb)
 
 
 def hit_weights(c_rel: np.ndarray, p_d: np.ndarray, d2: np.ndarray, det_S: np.ndarray,
@@ -74,7 +75,7 @@ def departure(x: np.ndarray, x_pre: np.ndarray, P_pre: np.ndarray, h: np.ndarray
     level, frequency): (x - x^pre)' P^pre^-1 (x - x^pre), 0 for a missed detection."""
     d = state_diff(x[h], x_pre[h])[:, 0::2]
     S = P_pre[h][:, 0::2, 0::2]
-    return np.einsum("ki,ki->k", d, np.linalg.solve(S, d[..., None])[..., 0])
+    return quadratic_form(d, S)
 
 
 def split_off_rates(x: np.ndarray, P: np.ndarray, x_pre: np.ndarray, P_pre: np.ndarray,
@@ -127,7 +128,7 @@ def mixture_moments(
     w = c / np.where(ci > 0, ci, 1.0)[track]
     d = state_diff(x, ref[track])
     xi = ref + _sum_by(w[:, None] * d, track, n_tracks)  # 000 x_i
-    xi[:, 0] = np.mod(xi[:, 0], 2.0 * np.pi)
+    xi[:, 0] = wrap_2pi(xi[:, 0])
     e = state_diff(x, xi[track])
     Pi = _sum_by((w[:, None, None] * (P + e[:, :, None] * e[:, None, :])).reshape(-1, n * n),
                  track, n_tracks).reshape(n_tracks, n, n)  # 000 P_i
@@ -221,7 +222,7 @@ def merge_apply(
     w = c / c12[inv]
     ref = x[heads]
     x12 = ref + _sum_by(w[:, None] * state_diff(x, ref[inv]), inv, heads.size)  # 000 x_i,h12
-    x12[:, 0] = np.mod(x12[:, 0], 2.0 * np.pi)
+    x12[:, 0] = wrap_2pi(x12[:, 0])
     e = state_diff(x, x12[inv])
     P12 = _sum_by((w[:, None, None] * (P + e[:, :, None] * e[:, None, :])).reshape(-1, n * n),
                   inv, heads.size).reshape(-1, n, n)  # 000 P_i,h12

@@ -28,7 +28,7 @@ class MhtParams(Params):
     p_d_max, d_thr: P_D = P_D_max / 2 erfc((D_thr - a_pre) / (sigma_a_pre sqrt 2)), D_thr
         in dB on the level scale of the amplitude state.
     rho_f: rho_F of the weight formula, the false-alarm density (1 / (rad dB)).
-    gate: lambda of the gate y' S^-1 y < lambda^2.
+    gate: lambda of the gate y' S^-1 y <= lambda^2.
     c_krit: new hypotheses lighter than this are pruned.
     d_merge_hyp: hypotheses of a track closer than this (d of d^2) are merged.
     d_split: a track whose two heaviest hypotheses are farther than this is split.

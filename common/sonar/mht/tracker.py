@@ -71,7 +71,7 @@ import math
 import numpy as np
 
 from common.core.angles import wrap_2pi
-from common.core.gating import gate, mahalanobis_sq, pairwise_innovations
+from common.core.gating import gate, mahalanobis_sq, pair_distances, pairwise_innovations
 from common.core.kalman import diagonal_covariances, predict, update
 from common.sonar.bearing.measurements import detection_measurements
 from common.sonar.bearing.model import detection_probability, measurement_matrix
@@ -157,13 +157,12 @@ class MhtTracker:
         xp, Pp = predict(self.hx, self.hP, F, Qm[self.hm])  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
-        hi, lj, y, S = self._gate(xp, Pp, z, Rd)
+        hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
         nT = tr.size
         ci = track_sums(self.hc, self.ht, nT)
         c_rel = self.hc / ci[self.ht] if self.hc.size else self.hc
         xu, Pu, _, _ = update(xp[hi], Pp[hi], y, H, diagonal_covariances(Rd[lj]), joseph=True)
         xu[:, 0] = wrap_2pi(xu[:, 0])
-        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
         detS = np.linalg.det(S)
         Hn = self.hx.shape[0]
         cx = np.concatenate([xp, xu])
@@ -240,25 +239,23 @@ class MhtTracker:
                      tr.IN >= 0, np.full(tr.size, NEW, dtype=np.int64), [])
 
     def _gate(self, xp: np.ndarray, Pp: np.ndarray, z: np.ndarray, Rd: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """000 gate y' S^-1 y < lambda^2: hypothesis rows, measurement columns,
-        innovations and S of the pairs inside. The batched gate uses S with the largest
-        R of the list (never smaller than a pair's S, so it loses no pair), then each
-        candidate pair is tested with its own S = H P^pre H' + R_l."""
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """000 gate y' S^-1 y <= lambda^2: hypothesis rows, measurement columns,
+        innovations, S and d^2 of the pairs inside. The batched gate uses S with the
+        largest R of the list (never smaller than a pair's S, so it loses no pair), then
+        each candidate pair is tested with its own S = H P^pre H' + R_l."""
         H, lam2 = self.H, self.mp.gate**2
         empty = np.zeros(0, dtype=np.intp)
         if xp.shape[0] == 0 or z.shape[0] == 0:
-            return empty, empty, np.zeros((0, self.m)), np.zeros((0, self.m, self.m))
+            return empty, empty, np.zeros((0, self.m)), np.zeros((0, self.m, self.m)), np.zeros(0)
         zp = xp @ H.T
         A = H @ Pp @ H.T
         Y = pairwise_innovations(zp, z, angle_idx=(0,))  # 000 y = z - H x^pre
         d2max = mahalanobis_sq(Y, A + np.diag(Rd.max(axis=0)))
         hi, lj = np.nonzero(gate(d2max, lam2))
-        y = Y[hi, lj]
-        S = A[hi] + diagonal_covariances(Rd[lj])  # 000 S = H P^pre H' + R
-        d2 = np.einsum("ki,ki->k", y, np.linalg.solve(S, y[..., None])[..., 0])
-        ok = d2 < lam2  # 000 y' S^-1 y < lambda^2
-        return hi[ok], lj[ok], y[ok], S[ok]
+        y, S, d2 = pair_distances(zp, A, z, Rd, hi, lj, angle_idx=(0,))  # 000 S = H P^pre H' + R
+        ok = gate(d2, lam2)  # 000 y' S^-1 y <= lambda^2
+        return hi[ok], lj[ok], y[ok], S[ok], d2[ok]
 
     def _open(self, z: np.ndarray, Rd: np.ndarray) -> None:
         """000 tentative tracks: x = H' z, P = P0, c = 1, SA = ZA = IN = 0 (IN = -1 here)."""

@@ -13,6 +13,7 @@ from typing import Protocol
 import numpy as np
 
 from common.core.angles import wrap_pi
+from common.core.gating import quadratic_form
 from common.sonar.mht.conflict import interpret, relink_choice, unresolved_probability
 from common.sonar.mht.hypotheses import heaviest, pair_distance2
 from common.sonar.mht.params import MhtParams
@@ -200,7 +201,7 @@ def continuation(trk: MhtState, s: int, x: np.ndarray, P: np.ndarray, t: float) 
     """ln N of a state x, P at t as the continuation of track s's state from before its
     conflict (`_innovation`)."""
     y, S = _innovation(trk, s, x, P, t)
-    return float(-0.5 * (y @ np.linalg.solve(S, y) + np.linalg.slogdet(S)[1]))
+    return float(-0.5 * (quadratic_form(y, S) + np.linalg.slogdet(S)[1]))
 
 
 def _off_bearing(trk: MhtState, s: int, w: int, t: float) -> bool:

@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from common.core.angles import TWO_PI
+from common.core.angles import TWO_PI, wrap_2pi
 
 
 @dataclass(frozen=True)
@@ -31,14 +31,14 @@ class Bounds:
     @property
     def course_width(self) -> float:
         """Width of the course interval in (0, 2 pi]."""
-        w = (self.k_max - self.k_min) % TWO_PI
+        w = wrap_2pi(self.k_max - self.k_min)
         return TWO_PI if w == 0.0 else w
 
     def violations(self, r: float, k: float, v: float) -> np.ndarray:
         """Flags (R, K, V) outside their interval (control unit 30, 003 claim 2b)."""
         return np.array([
             not self.r_min <= r <= self.r_max,
-            (k - self.k_min) % TWO_PI > self.course_width,
+            wrap_2pi(k - self.k_min) > self.course_width,
             not self.v_min <= v <= self.v_max,
         ])
 
@@ -56,7 +56,7 @@ def rkv(x: np.ndarray, own_c: np.ndarray) -> tuple[float, float, float]:
     """Range, course (rad in [0, 2 pi)) and speed of the state (x, y, vx, vy)."""
     return (
         float(np.hypot(x[0] - own_c[0], x[1] - own_c[1])),
-        float(np.arctan2(x[2], x[3]) % TWO_PI),
+        wrap_2pi(np.arctan2(x[2], x[3])),
         float(np.hypot(x[2], x[3])),
     )
 
@@ -68,14 +68,14 @@ def edge_flags(r: float, k: float, v: float, b: Bounds, tol: float) -> np.ndarra
     w = b.course_width
     fk = False
     if w < TWO_PI:
-        d = (k - b.k_min) % TWO_PI
+        d = wrap_2pi(k - b.k_min)
         fk = d <= tol * w or d >= (1.0 - tol) * w
     return np.array([fr, fk, fv])
 
 
 def _arc(angles: np.ndarray) -> tuple[float, float]:
     """Smallest clockwise arc (start, end) containing all angles."""
-    a = np.sort(np.asarray(angles) % TWO_PI)
+    a = np.sort(wrap_2pi(angles))
     gaps = np.diff(np.concatenate((a, [a[0] + TWO_PI])))
     i = int(np.argmax(gaps))
     return float(a[(i + 1) % a.size]), float(a[i])
@@ -91,7 +91,7 @@ def state_bounds(b: Bounds, own_c: np.ndarray, brg_c: float) -> tuple[np.ndarray
     u = np.array([np.sin(brg_c), np.cos(brg_c)])
     pos = own_c + np.outer([b.r_min, b.r_max], u)
     w = b.course_width
-    k0 = b.k_min % TWO_PI
+    k0 = wrap_2pi(b.k_min)
     ks = np.array([k0, k0 + w] + [c for c in np.arange(0.0, 2.0 * TWO_PI, np.pi / 2) if k0 <= c <= k0 + w])
     vel = np.concatenate([np.stack((v * np.sin(ks), v * np.cos(ks)), 1) for v in (b.v_min, b.v_max)])
     lo = np.concatenate((pos.min(0), vel.min(0)))
@@ -134,7 +134,7 @@ def recentre(b: Bounds, flags: np.ndarray, r: float, k: float, v: float, minimal
         out = replace(out, **dict(zip(("r_min", "r_max"), shift(b.r_min, b.r_max, r, minimal.r_min, minimal.r_max))))
     if flags[1] and b.course_width < TWO_PI:
         w = b.course_width
-        out = replace(out, k_min=(k - 0.5 * w) % TWO_PI, k_max=(k + 0.5 * w) % TWO_PI)
+        out = replace(out, k_min=wrap_2pi(k - 0.5 * w), k_max=wrap_2pi(k + 0.5 * w))
     if flags[2]:
         out = replace(out, **dict(zip(("v_min", "v_max"), shift(b.v_min, b.v_max, v, minimal.v_min, minimal.v_max))))
     return out

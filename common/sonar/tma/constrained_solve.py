@@ -11,14 +11,15 @@ from typing import Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from common.core.angles import TWO_PI, wrap_2pi
 from common.sonar.tma.bearings_only import Support, TmaSolution, covariance, leg_times, weighted_system
-from common.sonar.tma.bounds import TWO_PI, Bounds
+from common.sonar.tma.bounds import Bounds
 
 
 def _course_into(k: float, b: Bounds) -> float:
     """Course unwrapped into [k_min, k_min + width], clipped to the nearer edge if outside."""
     w = b.course_width
-    d = (k - b.k_min) % TWO_PI
+    d = wrap_2pi(k - b.k_min)
     if d > w:
         d = w if d - w < TWO_PI - d else 0.0
     return b.k_min + d
@@ -46,7 +47,7 @@ def legs_inside(beta: np.ndarray, leg_bounds: Sequence[Bounds | None]) -> bool:
     for j, b in enumerate(leg_bounds):
         if b is not None:
             vx, vy = beta[2 + 2 * j:4 + 2 * j]
-            if not b.contains(b.r_min, float(np.arctan2(vx, vy) % TWO_PI), float(np.hypot(vx, vy))):
+            if not b.contains(b.r_min, wrap_2pi(np.arctan2(vx, vy)), float(np.hypot(vx, vy))):
                 return False
     return True
 
