@@ -70,21 +70,23 @@ OWN_SHIP = {
     "speed": Field("float", nonneg=True),
 }
 
+# az and saz: both or neither (a range-Doppler base's plots have neither), see TOGETHER
 PLOTS = {
     "v": V, "t": T, "seq": SEQ, "base": ID, "channel": ID,
-    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
-    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(optional=True, angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(optional=True, positive=True),
     "snr": _col(optional=True),
 }
 FUSED = {
     "v": V, "t": T, "base": ID,
-    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
-    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(optional=True, angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(optional=True, positive=True),
     "n_ch": _col("ints", positive=True),
 }
+# x: 5 floats (azimuth base) or 3 (range-Doppler base), P its square; see ETRACK_SIZES
 ETRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
-    "x": Field("floats", length=5), "P": Field("floats", length=25),
+    "x": Field("floats"), "P": Field("floats"),
     "score": Field("float"), "n_ch": Field("int", nonneg=True),
     "updated": Field("bool"), "ambiguous": Field("bool"),
 }
@@ -222,12 +224,34 @@ def unpack(payload: bytes) -> dict[str, Any]:
     return obj
 
 
+# Optional fields present together or not at all, per message kind.
+TOGETHER: dict[str, tuple[str, str]] = {"plots": ("az", "saz"), "fused": ("az", "saz")}
+ETRACK_SIZES = (5, 3)  # len(x) of an azimuth base's etracks, of a range-Doppler base's
+
+
 def decode(kind: str, payload: bytes) -> dict[str, Any]:
     """Unpack and validate a payload of message type ``kind`` (a key of SCHEMAS)."""
     msg = validate(SCHEMAS[kind], unpack(payload), "")
     if msg["v"] != VERSION:
         raise DecodeError("v", f"unsupported protocol version {msg['v']}")
+    if kind in TOGETHER:
+        a, b = TOGETHER[kind]
+        if (a in msg) != (b in msg):
+            raise DecodeError(b if a in msg else a, f"missing: {a} and {b} come together")
+    if kind == "etracks":
+        _etrack_sizes(msg["tracks"])
     return msg
+
+
+def _etrack_sizes(tracks: list[dict[str, Any]]) -> None:
+    """Every x of ETRACK_SIZES, one size for all tracks of a message, P of len(x)^2."""
+    for i, e in enumerate(tracks):
+        n = len(e["x"])
+        if n not in ETRACK_SIZES or (i and n != len(tracks[0]["x"])):
+            raise DecodeError(f"tracks[{i}].x", f"expected {len(tracks[0]['x']) if i else '5 or 3'} "
+                              f"elements, got {n}")
+        if len(e["P"]) != n * n:
+            raise DecodeError(f"tracks[{i}].P", f"expected {n * n} elements, got {len(e['P'])}")
 
 
 def validate(schema: dict[str, Field], obj: Any, path: str) -> dict[str, Any]:

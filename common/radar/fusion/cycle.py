@@ -104,6 +104,10 @@ class GlobalFusion:
                  tracker: ElementaryParams | None = None) -> None:
         """tracker: the elementary trackers' parameters ([radar.tracker]), for the F [19]
         and Q [20] of the decorrelation."""
+        no_az = [b.id for b in bases if not b.azimuth]
+        if no_az:
+            raise ValueError(f"global fusion (001 step 24) needs the azimuth of every base; "
+                             f"{', '.join(no_az)} declared azimuth = false (range-Doppler)")
         self.p = params or FusionParams()
         et = tracker or ElementaryParams()
         self.decorrelator = Decorrelator(et.sigma_gamma, et.sigma_omega,
