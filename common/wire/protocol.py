@@ -83,14 +83,15 @@ FUSED = {
     "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(optional=True, positive=True),
     "n_ch": _col("ints", positive=True),
 }
-# x: 5 floats (azimuth base) or 3 (range-Doppler base), P its square; see ETRACK_SIZES
+# x: 5 floats, or 3 in a message with azimuth = false (range-Doppler base); P its square
 ETRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
     "x": Field("floats"), "P": Field("floats"),
     "score": Field("float"), "n_ch": Field("int", nonneg=True),
     "updated": Field("bool"), "ambiguous": Field("bool"),
 }
-ETRACKS = {"v": V, "t": T, "base": ID, "tracks": Field("maps", sub=ETRACK)}
+ETRACKS = {"v": V, "t": T, "base": ID, "azimuth": Field("bool", optional=True),
+           "tracks": Field("maps", sub=ETRACK)}
 GTRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
     "x": Field("floats", length=6), "P": Field("floats", length=36),
@@ -226,7 +227,7 @@ def unpack(payload: bytes) -> dict[str, Any]:
 
 # Optional fields present together or not at all, per message kind.
 TOGETHER: dict[str, tuple[str, str]] = {"plots": ("az", "saz"), "fused": ("az", "saz")}
-ETRACK_SIZES = (5, 3)  # len(x) of an azimuth base's etracks, of a range-Doppler base's
+ETRACK_SIZES = {True: 5, False: 3}  # len(x) of etracks by the message's azimuth (absent: true)
 
 
 def decode(kind: str, payload: bytes) -> dict[str, Any]:
@@ -239,19 +240,16 @@ def decode(kind: str, payload: bytes) -> dict[str, Any]:
         if (a in msg) != (b in msg):
             raise DecodeError(b if a in msg else a, f"missing: {a} and {b} come together")
     if kind == "etracks":
-        _etrack_sizes(msg["tracks"])
+        _etrack_sizes(msg["tracks"], ETRACK_SIZES[msg.get("azimuth", True)])
     return msg
 
 
-def _etrack_sizes(tracks: list[dict[str, Any]]) -> None:
-    """Every x of ETRACK_SIZES, one size for all tracks of a message, P of len(x)^2."""
+def _etrack_sizes(tracks: list[dict[str, Any]], n: int) -> None:
+    """Every x of n elements and every P of n^2."""
     for i, e in enumerate(tracks):
-        n = len(e["x"])
-        if n not in ETRACK_SIZES or (i and n != len(tracks[0]["x"])):
-            raise DecodeError(f"tracks[{i}].x", f"expected {len(tracks[0]['x']) if i else '5 or 3'} "
-                              f"elements, got {n}")
-        if len(e["P"]) != n * n:
-            raise DecodeError(f"tracks[{i}].P", f"expected {n * n} elements, got {len(e['P'])}")
+        for name, size in (("x", n), ("P", n * n)):
+            if len(e[name]) != size:
+                raise DecodeError(f"tracks[{i}].{name}", f"expected {size} elements, got {len(e[name])}")
 
 
 def validate(schema: dict[str, Field], obj: Any, path: str) -> dict[str, Any]:

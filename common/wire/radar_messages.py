@@ -55,9 +55,11 @@ def plots_of(msg: dict[str, Any], azimuth: bool = True) -> Plots:
 
 
 def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
-    """The `radar/etracks/<base>` message of one scan (every live track)."""
+    """The `radar/etracks/<base>` message of one scan (every live track); `azimuth`:
+    false for the 3-state tracks of a range-Doppler base (absent otherwise)."""
+    rd = {} if tracks.x.shape[1] == protocol.ETRACK_SIZES[True] else {"azimuth": False}
     return {
-        "v": protocol.VERSION, "t": tracks.t, "base": base,
+        "v": protocol.VERSION, "t": tracks.t, "base": base, **rd,
         "tracks": [
             {"id": int(tracks.id[k]), "status": STATUS_NAME[Status(int(tracks.status[k]))],
              "x": tracks.x[k], "P": tracks.P[k].ravel(), "score": float(tracks.score[k]),
@@ -70,11 +72,11 @@ def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
 
 def etracks_from(msg: dict[str, Any]) -> tuple[str, ElementaryTracks]:
     """(base, elementary tracks) of an etracks message, decoded or as built: x (N, 5)
-    and P (N, 5, 5), or x (N, 3) and P (N, 3, 3) from a range-Doppler base (the length
-    of x tells; an empty message gives 5 columns)."""
+    and P (N, 5, 5), or x (N, 3) and P (N, 3, 3) from a range-Doppler base (the
+    message's `azimuth`, absent: true, tells)."""
     tr = msg["tracks"]
     n = len(tr)
-    k = len(tr[0]["x"]) if n else 5
+    k = protocol.ETRACK_SIZES[msg.get("azimuth", True)]
     return msg["base"], ElementaryTracks(
         t=float(msg["t"]), id=np.array([e["id"] for e in tr], dtype=np.int64),
         status=np.array([STATUS_CODE[e["status"]] for e in tr], dtype=np.int64),
@@ -107,10 +109,11 @@ def _fast_etracks(obj: Any) -> tuple[str, ElementaryTracks] | None:
         status = [STATUS_CODE[s] for s in cols["status"]]
     except (TypeError, KeyError):  # an item that is not a map, a missing key, a bad status
         return None
-    n = len(tracks)
-    k = len(cols["x"][0]) if n and type(cols["x"][0]) is list else 5
-    if not (k in protocol.ETRACK_SIZES
-            and all(type(a) is list and len(a) == k for a in cols["x"])
+    azimuth: Any = obj.get("azimuth", True)
+    if type(azimuth) is not bool:
+        return None
+    n, k = len(tracks), protocol.ETRACK_SIZES[azimuth]
+    if not (all(type(a) is list and len(a) == k for a in cols["x"])
             and all(type(a) is list and len(a) == k * k for a in cols["P"])
             and _numbers(cols["id"], True) and _numbers(cols["n_ch"], True)
             and _numbers(cols["score"], False) and _numbers(list(chain.from_iterable(cols["x"])), False)

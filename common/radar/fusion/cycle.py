@@ -71,6 +71,7 @@ import numpy as np
 from common.core import imm
 from common.core.crossing import CrossingManager, CrossingParams
 from common.core.gating import chi2_gate
+from common.core.rejection import Rejected
 from common.core.track_table import TrackTable
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracks
 from common.radar.fusion.assoc import (
@@ -152,7 +153,10 @@ class GlobalFusion:
     def push(self, base: str, tracks: ElementaryTracks, stale: frozenset[str] = frozenset()
              ) -> list[GlobalTracks]:
         """Buffer the report of one base (known, not late); run the cycles completed
-        by the bases not in `stale` (base ids), oldest first."""
+        by the bases not in `stale` (base ids), oldest first. Raises Rejected for the
+        3-state tracks of a range-Doppler base (no theta for 001 step 24)."""
+        if tracks.x.shape[1] != 5:
+            raise Rejected("no_azimuth", f"base {base}: elementary tracks without theta")
         self.pending.setdefault(tracks.t, {})[self.index[base]] = tracks
         need = {self.index[b] for b in self.base_ids if b not in stale}
         out = []
