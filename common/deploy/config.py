@@ -85,13 +85,17 @@ class ZenohConfig:
 
 @dataclass(frozen=True)
 class RadarBase:
-    """One bistatic base: the receiver and one transmitter of opportunity (001)."""
+    """One bistatic base: the receiver and one transmitter of opportunity (001).
+
+    azimuth: the receiver measures theta (001 [3]); false for a range-Doppler base
+    (omnidirectional antenna: plots [r_b, v_b], elementary state [r_b, v_b, gamma_b])."""
 
     id: str
     tx: np.ndarray
     rx: np.ndarray
     channels: list[str]
     p: int = 1
+    azimuth: bool = True
 
 
 @dataclass(frozen=True)
@@ -292,7 +296,7 @@ def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
 def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     key = f"radar.base[{i}]"
     _check_table(b, key)
-    unknown = set(b) - {"id", "tx", "rx", "tx_geo", "rx_geo", "channels", "p"}
+    unknown = set(b) - {"id", "tx", "rx", "tx_geo", "rx_geo", "channels", "p", "azimuth"}
     if unknown:
         raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
     for k in ("id", "channels"):
@@ -306,10 +310,13 @@ def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     p = b.get("p", 1)
     if not isinstance(p, int) or isinstance(p, bool) or p < 0:
         raise ConfigError(f"{key}.p", "must be an integer >= 0")
+    azimuth = b.get("azimuth", True)
+    if not isinstance(azimuth, bool):
+        raise ConfigError(f"{key}.azimuth", "must be true or false")
     tx, rx = site_position(b, "tx", key, origin), site_position(b, "rx", key, origin)
     if np.linalg.norm(tx - rx) <= 0:
         raise ConfigError(f"{key}.tx", "transmitter and receiver must differ")
-    return RadarBase(_chunk(b["id"], f"{key}.id"), tx, rx, chans, p)
+    return RadarBase(_chunk(b["id"], f"{key}.id"), tx, rx, chans, p, azimuth)
 
 
 def _sonar_array(a: Any, i: int) -> SonarArray:

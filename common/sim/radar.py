@@ -1,7 +1,9 @@
 """Simulated passive radar plots of one channel of one bistatic base for one scan.
 
 Target plots are the true bistatic measurements y = [r_b, v_b, theta] (001 [1]-[3])
-plus Gaussian noise with the channel's diagonal covariance R (001 [4]); targets outside
+plus Gaussian noise with the channel's diagonal covariance R (001 [4]); a base declared
+`azimuth = false` gets no az, saz columns (the same draws, so its other columns equal
+those of an azimuth base); targets outside
 the surveillance window (r_b > rb_max or |v_b| > vb_max) are not detected. False plots
 are uniform in the window, their number Poisson distributed.
 
@@ -32,7 +34,8 @@ def radar_plots(
     radar: RadarSim,
     rng: np.random.Generator,
 ) -> dict[str, np.ndarray]:
-    """Plots (columns of COLUMNS) of one channel for targets at pos, vel (N, 3)."""
+    """Plots (columns of COLUMNS, without az and saz at a range-Doppler base) of one
+    channel for targets at pos, vel (N, 3)."""
     r_t = np.linalg.norm(pos - base.tx, axis=1)
     r_r = np.linalg.norm(pos - base.rx, axis=1)
     rb = r_t + r_r  # 001 [1]
@@ -59,4 +62,6 @@ def radar_plots(
     out["az"] = wrap_2pi(out["az"])
     m = len(order)
     out.update(srb=np.full(m, ch.srb), svb=np.full(m, ch.svb), saz=np.full(m, ch.saz))
+    if not base.azimuth:
+        del out["az"], out["saz"]
     return out

@@ -73,25 +73,28 @@ OWN_SHIP = {
     "speed": Field("float", nonneg=True),
 }
 
+# az and saz: both or neither (a range-Doppler base's plots have neither), see TOGETHER
 PLOTS = {
     "v": V, "t": T, "seq": SEQ, "base": ID, "channel": ID,
-    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
-    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(optional=True, angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(optional=True, positive=True),
     "snr": _col(optional=True),
 }
 FUSED = {
     "v": V, "t": T, "base": ID,
-    "rb": _col(nonneg=True), "vb": _col(), "az": _col(angle=True),
-    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(positive=True),
+    "rb": _col(nonneg=True), "vb": _col(), "az": _col(optional=True, angle=True),
+    "srb": _col(positive=True), "svb": _col(positive=True), "saz": _col(optional=True, positive=True),
     "n_ch": _col("ints", positive=True),
 }
+# x: 5 floats, or 3 in a message with azimuth = false (range-Doppler base); P its square
 ETRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
-    "x": Field("floats", length=5), "P": Field("floats", length=25),
+    "x": Field("floats"), "P": Field("floats"),
     "score": Field("float"), "n_ch": Field("int", nonneg=True),
     "updated": Field("bool"), "ambiguous": Field("bool"),
 }
-ETRACKS = {"v": V, "t": T, "base": ID, "tracks": Field("maps", sub=ETRACK)}
+ETRACKS = {"v": V, "t": T, "base": ID, "azimuth": Field("bool", optional=True),
+           "tracks": Field("maps", sub=ETRACK)}
 GTRACK = {
     "id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
     "x": Field("floats", length=6), "P": Field("floats", length=36),
@@ -229,12 +232,31 @@ def unpack(payload: bytes) -> dict[str, Any]:
     return obj
 
 
+# Optional fields present together or not at all, per message kind.
+TOGETHER: dict[str, tuple[str, str]] = {"plots": ("az", "saz"), "fused": ("az", "saz")}
+ETRACK_SIZES = {True: 5, False: 3}  # len(x) of etracks by the message's azimuth (absent: true)
+
+
 def decode(kind: str, payload: bytes) -> dict[str, Any]:
     """Unpack and validate a payload of message type ``kind`` (a key of SCHEMAS)."""
     msg = validate(SCHEMAS[kind], unpack(payload), "")
     if msg["v"] != VERSION:
         raise DecodeError("v", f"unsupported protocol version {msg['v']}")
+    if kind in TOGETHER:
+        a, b = TOGETHER[kind]
+        if (a in msg) != (b in msg):
+            raise DecodeError(b if a in msg else a, f"missing: {a} and {b} come together")
+    if kind == "etracks":
+        _etrack_sizes(msg["tracks"], ETRACK_SIZES[msg.get("azimuth", True)])
     return msg
+
+
+def _etrack_sizes(tracks: list[dict[str, Any]], n: int) -> None:
+    """Every x of n elements and every P of n^2."""
+    for i, e in enumerate(tracks):
+        for name, size in (("x", n), ("P", n * n)):
+            if len(e[name]) != size:
+                raise DecodeError(f"tracks[{i}].{name}", f"expected {size} elements, got {len(e[name])}")
 
 
 def validate(schema: dict[str, Field], obj: Any, path: str) -> dict[str, Any]:

@@ -18,6 +18,7 @@ from typing import Any
 
 from common.core.crossing import CrossingParams
 from common.deploy.config import Config, section
+from common.radar.elementary.model import model_of
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
 from common.radar.fusion.arrival import Arrival
 from common.radar.fusion.cycle import GlobalFusion
@@ -29,7 +30,8 @@ from common.wire.radar_messages import gtracks_message, plots_of
 def global_fusion(cfg: Config) -> GlobalFusion:
     """The global fusion core of a deployment: [radar.fusion], [radar.fusion_crossing]
     (the sup-norm test of 004 when absent) and [radar.tracker] (for the decorrelation).
-    Raises ValueError if the bases cannot be fused (fewer than 2, several receivers)."""
+    Raises ValueError if the bases cannot be fused (fewer than 2, several receivers, a
+    base without azimuth)."""
     crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     return GlobalFusion(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
@@ -43,8 +45,10 @@ class RadarChain:
         plotter = section(cfg, "radar.plotter", PlotterParams)
         tracker = section(cfg, "radar.tracker", ElementaryParams)
         crossing = section(cfg, "radar.crossing", RadarCrossingParams)
-        self.plotters = {b.id: PlotFusion(b.channels, b.p, plotter) for b in cfg.bases}
-        self.trackers = {b.id: ElementaryTracker(tracker, crossing) for b in cfg.bases}
+        self.azimuth = {b.id: b.azimuth for b in cfg.bases}
+        self.plotters = {b.id: PlotFusion(b.channels, b.p, plotter, b.azimuth) for b in cfg.bases}
+        self.trackers = {b.id: ElementaryTracker(tracker, crossing, model_of(b.azimuth))
+                         for b in cfg.bases}
         self.fusion = global_fusion(cfg)
         self.origin = cfg.origin
         self.arrival = Arrival(self.fusion)
@@ -57,7 +61,8 @@ class RadarChain:
             if not key.startswith("radar/plots/"):
                 continue
             base = msg["base"]
-            for t, fused in self.plotters[base].push(msg["channel"], msg["t"], plots_of(msg)):
+            plots = plots_of(msg, self.azimuth[base])
+            for t, fused in self.plotters[base].push(msg["channel"], msg["t"], plots):
                 tracks = self.trackers[base].step(t, fused)
                 out += [gtracks_message(g, self.origin) for g in self.arrival.push(base, tracks, t)]
         return out

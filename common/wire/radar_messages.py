@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from common.core.rejection import Rejected
 from common.core.track_table import STATUS_NAME, Status
 from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.report import GlobalTracks
@@ -29,25 +30,37 @@ MAX_INT = 2**62
 
 
 def fused_message(base: str, t: float, fused: Plots) -> dict[str, Any]:
-    """The `radar/fused/<base>` message of one scan."""
+    """The `radar/fused/<base>` message of one scan (no az, saz at a range-Doppler base)."""
+    if not fused.azimuth:
+        return {"v": protocol.VERSION, "t": t, "base": base, "rb": fused.rb, "vb": fused.vb,
+                "srb": fused.srb, "svb": fused.svb, "n_ch": fused.n_ch}
     return {"v": protocol.VERSION, "t": t, "base": base,
             "rb": fused.rb, "vb": fused.vb, "az": fused.az,
             "srb": fused.srb, "svb": fused.svb, "saz": fused.saz, "n_ch": fused.n_ch}
 
 
-def plots_of(msg: dict[str, Any]) -> Plots:
+def plots_of(msg: dict[str, Any], azimuth: bool = True) -> Plots:
     """Plots of a `plots` or `fused` message, decoded or as built (n_ch only in the
-    latter)."""
-    rb, vb, az, srb, svb, saz = (np.asarray(msg[k], dtype=float) for k in ("rb", "vb", "az", "srb", "svb", "saz"))
+    latter), from a base declared with `azimuth`. Raises Rejected `unexpected_azimuth`
+    for az from a range-Doppler base, `missing_azimuth` for none from an azimuth base."""
+    if ("az" in msg) != azimuth:
+        raise Rejected("missing_azimuth" if azimuth else "unexpected_azimuth",
+                       f"base '{msg.get('base')}' is declared azimuth = {str(azimuth).lower()}, "
+                       f"its message {'has' if 'az' in msg else 'has no'} az")
+    rb, vb, srb, svb = (np.asarray(msg[k], dtype=float) for k in ("rb", "vb", "srb", "svb"))
+    az, saz = ((np.asarray(msg["az"], dtype=float), np.asarray(msg["saz"], dtype=float))
+               if azimuth else (None, None))
     if "n_ch" in msg:
         return Plots(rb, vb, az, srb, svb, saz, np.asarray(msg["n_ch"], dtype=np.int64))
     return Plots(rb, vb, az, srb, svb, saz)
 
 
 def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
-    """The `radar/etracks/<base>` message of one scan (every live track)."""
+    """The `radar/etracks/<base>` message of one scan (every live track); `azimuth`:
+    false for the 3-state tracks of a range-Doppler base (absent otherwise)."""
+    rd = {} if tracks.x.shape[1] == protocol.ETRACK_SIZES[True] else {"azimuth": False}
     return {
-        "v": protocol.VERSION, "t": tracks.t, "base": base,
+        "v": protocol.VERSION, "t": tracks.t, "base": base, **rd,
         "tracks": [
             {"id": int(tracks.id[k]), "status": STATUS_NAME[Status(int(tracks.status[k]))],
              "x": tracks.x[k], "P": tracks.P[k].ravel(), "score": float(tracks.score[k]),
@@ -59,14 +72,17 @@ def etracks_message(base: str, tracks: ElementaryTracks) -> dict[str, Any]:
 
 
 def etracks_from(msg: dict[str, Any]) -> tuple[str, ElementaryTracks]:
-    """(base, elementary tracks) of an etracks message, decoded or as built."""
+    """(base, elementary tracks) of an etracks message, decoded or as built: x (N, 5)
+    and P (N, 5, 5), or x (N, 3) and P (N, 3, 3) from a range-Doppler base (the
+    message's `azimuth`, absent: true, tells)."""
     tr = msg["tracks"]
     n = len(tr)
+    k = protocol.ETRACK_SIZES[msg.get("azimuth", True)]
     return msg["base"], ElementaryTracks(
         t=float(msg["t"]), id=np.array([e["id"] for e in tr], dtype=np.int64),
         status=np.array([STATUS_CODE[e["status"]] for e in tr], dtype=np.int64),
-        x=np.array([e["x"] for e in tr], dtype=float).reshape(n, 5),
-        P=np.array([e["P"] for e in tr], dtype=float).reshape(n, 5, 5),
+        x=np.array([e["x"] for e in tr], dtype=float).reshape(n, k),
+        P=np.array([e["P"] for e in tr], dtype=float).reshape(n, k, k),
         score=np.array([e["score"] for e in tr], dtype=float),
         n_ch=np.array([e["n_ch"] for e in tr], dtype=np.int64),
         updated=np.array([e["updated"] for e in tr], dtype=bool),
@@ -94,9 +110,12 @@ def _fast_etracks(obj: Any) -> tuple[str, ElementaryTracks] | None:
         status = [STATUS_CODE[s] for s in cols["status"]]
     except (TypeError, KeyError):  # an item that is not a map, a missing key, a bad status
         return None
-    n = len(tracks)
-    if not (all(type(a) is list and len(a) == 5 for a in cols["x"])
-            and all(type(a) is list and len(a) == 25 for a in cols["P"])
+    azimuth: Any = obj.get("azimuth", True)
+    if type(azimuth) is not bool:
+        return None
+    n, k = len(tracks), protocol.ETRACK_SIZES[azimuth]
+    if not (all(type(a) is list and len(a) == k for a in cols["x"])
+            and all(type(a) is list and len(a) == k * k for a in cols["P"])
             and _numbers(cols["id"], True) and _numbers(cols["n_ch"], True)
             and _numbers(cols["score"], False) and _numbers(list(chain.from_iterable(cols["x"])), False)
             and _numbers(list(chain.from_iterable(cols["P"])), False)
@@ -104,8 +123,8 @@ def _fast_etracks(obj: Any) -> tuple[str, ElementaryTracks] | None:
         return None
     if any(not 0 <= i <= MAX_INT for i in cols["id"] + cols["n_ch"]):
         return None
-    x = np.array(cols["x"], dtype=float).reshape(n, 5)
-    P = np.array(cols["P"], dtype=float).reshape(n, 5, 5)
+    x = np.array(cols["x"], dtype=float).reshape(n, k)
+    P = np.array(cols["P"], dtype=float).reshape(n, k, k)
     score = np.array(cols["score"], dtype=float)
     if not (np.isfinite(x).all() and np.isfinite(P).all() and np.isfinite(score).all()):
         return None

@@ -175,9 +175,11 @@ class ViewModel:
         base = self.cfg.base(msg["base"])  # ConfigError (a ValueError): a base not in the file
         arcs = []
         for k in msg["tracks"]:
-            xk, P = np.asarray(k["x"], dtype=float), np.asarray(k["P"], dtype=float).reshape(5, 5)
-            pts = bistatic_arc(float(xk[0]), float(xk[3]), float(np.sqrt(max(P[3, 3], 0.0))),
-                               base.tx, base.rx)
+            xk = np.asarray(k["x"], dtype=float)
+            n = xk.size  # 3 at a range-Doppler base: no theta, the whole ellipse
+            P = np.asarray(k["P"], dtype=float).reshape(n, n)
+            theta, sigma = (float(xk[3]), float(np.sqrt(max(P[3, 3], 0.0)))) if n == 5 else (0.0, np.pi)
+            pts = bistatic_arc(float(xk[0]), theta, sigma, base.tx, base.rx)
             if pts:
                 arcs.append({"id": int(k["id"]), "status": k["status"],
                              "amb": bool(k["ambiguous"]), "pts": pts})

@@ -1,8 +1,9 @@
 """``pfusion channel-plotter``: channel plots of one base -> fused plots (001 modules 31-34).
 
 Subscribes radar/plots/<base>/*, publishes radar/fused/<base> once per scan (also when
-empty). The algorithm is common.radar.plots.channel_fusion; this module only decodes, validates and
-publishes.
+empty). A base declared `azimuth = false` (range-Doppler) fuses on (r_b, v_b) and
+rejects plots that carry az (`unexpected_azimuth`). The algorithm is
+common.radar.plots.channel_fusion; this module only decodes, validates and publishes.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ def main(args: argparse.Namespace) -> int:
     base = cfg.base(args.base)
     params = section(cfg, "radar.plotter", PlotterParams)
     svc = Service("channel_plotter", base.id, cfg)
-    core = PlotFusion(base.channels, base.p, params)
+    core = PlotFusion(base.channels, base.p, params, base.azimuth)
 
     def on_plots(key: str, payload: bytes) -> None:
         msg = protocol.decode("plots", payload)
@@ -33,7 +34,7 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_base", f"base '{msg['base']}' on a plotter of '{base.id}'")
         if msg["channel"] != key.rsplit("/", 1)[-1]:
             raise Rejected("channel_mismatch", f"channel '{msg['channel']}' published on {key}")
-        scans = core.push(msg["channel"], msg["t"], plots_of(msg))
+        scans = core.push(msg["channel"], msg["t"], plots_of(msg, base.azimuth))
         for t, fused in scans:
             svc.last_t = t
             svc.publish(f"radar/fused/{base.id}", fused_message(base.id, t, fused))

@@ -10,15 +10,17 @@ from scipy.stats import chi2
 from common.core.rejection import Rejected
 from common.core.track_table import Status
 from common.radar.elementary.initiation import compatible, initial_state, propagate
+from common.radar.elementary.model import AZIMUTH
 from common.radar.elementary.tracker import (
     ElementaryParams,
     ElementaryTracker,
-    H,
     RadarCrossingParams,
     drop_acceleration,
     gate_pairs,
 )
 from common.radar.plots.channel_fusion import Plots
+
+H = AZIMUTH.H
 
 SIG = (100.0, 2.0, 0.01)
 

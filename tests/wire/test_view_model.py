@@ -118,6 +118,17 @@ def test_elementary_tracks_become_arcs_and_an_unknown_base_is_refused() -> None:
         m.ingest("etracks", wire("etracks", {"t": 5.0, "base": "b9", "tracks": [track]}))
 
 
+def test_range_doppler_tracks_become_whole_ellipses() -> None:
+    m = ViewModel(CFG)
+    b1 = CFG.base("b1")
+    rb = float(np.linalg.norm(b1.tx[:2] - b1.rx[:2])) + 60000.0
+    track = {"id": 5, "status": "tentative", "x": [rb, 10.0, 0.0], "P": np.eye(3).ravel().tolist(),
+             "score": 1.0, "n_ch": 2, "updated": True, "ambiguous": False}
+    m.ingest("etracks", wire("etracks", {"t": 5.0, "base": "b1", "azimuth": False, "tracks": [track]}))
+    pts = np.array(json.loads(m.topics["etracks/b1"].json())["arcs"][0]["pts"])
+    np.testing.assert_allclose(pts[0], pts[-1], atol=0.2)  # no theta: the closed ellipse
+
+
 def test_waterfall_and_bearing_series_are_bounded_to_the_window() -> None:
     m = ViewModel(CFG)
     own = {"x": 0.0, "y": 0.0, "heading": 0.0, "speed": 3.0}

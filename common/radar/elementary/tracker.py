@@ -1,5 +1,10 @@
 """Elementary tracks of one bistatic base (seed 001, step 23, operation 222).
 
+The tracker is parametrised by its base's measurement model
+(`common.radar.elementary.model`): AZIMUTH as below, or RANGE_DOPPLER for a base
+without theta (state [r_b, v_b, gamma_b], gate chi-square(2), crossing management on
+(r_b, v_b) instead of (r_b, theta)).
+
 Per scan of fused plots at time t (module 41 sequencing):
   1. module 44 prediction of every track to t: F [19], Q [20], 001 [25]-[26];
   2. module 43 gating d = i' S^-1 i (001 [8]-[11]), S = H P~ H' + R_j per pair, gate
@@ -31,7 +36,7 @@ unsupported ones could not be told apart from the right one.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -41,25 +46,23 @@ from common.core.angles import wrap_2pi, wrap_pi
 from common.core.assignment import nearest_neighbour
 from common.core.crossing import CrossingManager, CrossingParams
 from common.core.gating import chi2_gate, gate, overlap_pairs, pair_distances, window_pairs
-from common.core.motion import bistatic_F, bistatic_Q
 from common.core.params import PROB_OPEN, Params, Range, Rule, count, non_negative, order, positive, unbounded
 from common.core.rejection import Rejected
 from common.core.track_table import Status, TrackTable
 from common.radar.elementary.initiation import compatible, initial_state, propagate
+from common.radar.elementary.model import AZIMUTH, MeasurementModel
 from common.radar.plots.channel_fusion import Plots
 
-H = np.array([[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 0, 1, 0]], dtype=float)  # 001 [11], [22]
-MEAS = [0, 1, 3]  # state components observed by H
-AZ = 2  # azimuth component of a measurement y = [r_b, v_b, theta]
 NEAR_SIGMAS = 8.0  # crossing candidates: another track within this many sigmas
 
 
-def neighbours(z: np.ndarray, sigma: np.ndarray, k: float) -> np.ndarray:
-    """(N,) mask of points z = (r_b, theta) with another point j such that
-    |dz_c| <= k (sigma_c + sigma_jc) on both components (theta on the circle); a
-    superset of the pairs within k sqrt(sigma_c^2 + sigma_jc^2). Sweep on r_b."""
+def neighbours(z: np.ndarray, sigma: np.ndarray, k: float, angle: bool = True) -> np.ndarray:
+    """(N,) mask of points z = (r_b, theta) (or (r_b, v_b), angle false) with another
+    point j such that |dz_c| <= k (sigma_c + sigma_jc) on both components (theta on the
+    circle); a superset of the pairs within k sqrt(sigma_c^2 + sigma_jc^2). Sweep on r_b."""
     a, b = overlap_pairs(z[:, 0] - k * sigma[:, 0], z[:, 0] + k * sigma[:, 0])
-    ok = np.abs(wrap_pi(z[a, 1] - z[b, 1])) <= k * (sigma[a, 1] + sigma[b, 1])
+    dz = z[a, 1] - z[b, 1]
+    ok = np.abs(wrap_pi(dz) if angle else dz) <= k * (sigma[a, 1] + sigma[b, 1])
     mask = np.zeros(z.shape[0], dtype=bool)
     mask[a[ok]] = mask[b[ok]] = True
     return mask
@@ -141,7 +144,9 @@ class RadarCrossingParams(CrossingParams):
 
 @dataclass
 class ElementaryTracks:
-    """Live tracks after a scan (one row per track, ascending number)."""
+    """Live tracks after a scan (one row per track, ascending number): x (N, 5) and
+    P (N, 5, 5) of the AZIMUTH model, x (N, 3) = [r_b, v_b, gamma_b] and P (N, 3, 3) of
+    the RANGE_DOPPLER one."""
 
     t: float
     id: np.ndarray
@@ -157,11 +162,13 @@ class ElementaryTracks:
         return int(self.id.shape[0])
 
 
-def gate_pairs(z_pred: np.ndarray, S_pred: np.ndarray, plots: Plots, gamma: float
+def gate_pairs(z_pred: np.ndarray, S_pred: np.ndarray, plots: Plots, gamma: float,
+               angles: tuple[int, ...] = AZIMUTH.angles
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pairs (t, j) with d = i' S^-1 i <= gamma, S = H P~ H' + R_j (001 [8]-[10]), and d.
 
-    z_pred (N, 3) = H x~, S_pred (N, 3, 3) = H P~ H'. Candidates come from a sweep on
+    z_pred (N, m) = H x~, S_pred (N, m, m) = H P~ H' (m = 3, or 2 without azimuth);
+    `angles` the measurement components on the circle. Candidates come from a sweep on
     r_b with the necessary condition i_r^2 <= gamma S_rr (a marginal of d), then the
     same on v_b and theta, then the exact d on the survivors only.
     """
@@ -171,50 +178,63 @@ def gate_pairs(z_pred: np.ndarray, S_pred: np.ndarray, plots: Plots, gamma: floa
     half = np.sqrt(gamma * (S_pred[:, 0, 0] + plots.srb.max() ** 2))
     t, j = window_pairs(z_pred[:, 0] - half, z_pred[:, 0] + half, plots.rb)
     i = plots.y[j] - z_pred[t]  # 001 [9]
-    i[:, AZ] = wrap_pi(i[:, AZ])
+    for a in angles:
+        i[:, a] = wrap_pi(i[:, a])
     sig2 = np.square(plots.sigma)
-    ok = np.all(i**2 <= gamma * (S_pred[t][:, [0, 1, 2], [0, 1, 2]] + sig2[j]), axis=1)
+    diag = list(range(z_pred.shape[1]))
+    ok = np.all(i**2 <= gamma * (S_pred[t][:, diag, diag] + sig2[j]), axis=1)
     t, j = t[ok], j[ok]
-    _, _, d = pair_distances(z_pred, S_pred, plots.y, sig2, t, j, angle_idx=(AZ,))  # 001 [8]-[10]
+    _, _, d = pair_distances(z_pred, S_pred, plots.y, sig2, t, j, angle_idx=angles)  # 001 [8]-[10]
     ok = gate(d, gamma)
     return t[ok], j[ok], d[ok]
 
 
 class ElementaryTracker:
-    """Modules 41-44 for one base, driven by fused-plot scans (message times only)."""
+    """Modules 41-44 for one base, driven by fused-plot scans (message times only).
+
+    model: AZIMUTH (001 as written) or RANGE_DOPPLER (a base without theta); the 004
+    domain volume of [radar.crossing] is scaled by the model's volume_scale."""
 
     def __init__(self, params: ElementaryParams | None = None,
-                 crossing: RadarCrossingParams | None = None) -> None:
+                 crossing: RadarCrossingParams | None = None,
+                 model: MeasurementModel = AZIMUTH) -> None:
         self.params = params or ElementaryParams()
+        self.model = model
         self.crossing_params = crossing or RadarCrossingParams()
-        self.crossing = CrossingManager(self.crossing_params)
-        self.gamma = chi2_gate(self.params.gate_prob, 3)  # 001: chi-square, 3 dof
-        self.table = TrackTable(5, extra={"n_ch": ((), np.int64), "r": ((3,), np.float64),
-                                          "updated": ((), np.bool_), "ambiguous": ((), np.bool_)})
+        self.crossing = CrossingManager(replace(
+            self.crossing_params, volume=self.crossing_params.volume * model.volume_scale))
+        self.gamma = chi2_gate(self.params.gate_prob, model.m)  # 001: chi-square, m dof
+        self.table = TrackTable(model.n, extra={"n_ch": ((), np.int64), "r": ((model.m,), np.float64),
+                                                "updated": ((), np.bool_), "ambiguous": ((), np.bool_)})
         self.t: float | None = None
-        self._prev = Plots.empty()
+        self._prev = Plots.empty(model.azimuth)
 
     def step(self, t: float, plots: Plots) -> ElementaryTracks:
         """Process the fused plots of time t; returns every live track."""
         if self.t is not None and t <= self.t:
             raise Rejected("time_backwards", f"fused scan t={t} not after t={self.t}")
-        tab = self.table
+        if plots.azimuth != self.model.azimuth:
+            raise Rejected("azimuth_mismatch", f"fused plots with azimuth = {plots.azimuth} "
+                           f"at a base with azimuth = {self.model.azimuth}")
+        tab, H = self.table, self.model.H
         idx = tab.active_indices()
         x, P = self._predict(idx, t)
-        z_pred = x[:, MEAS]
+        z_pred = x[:, list(self.model.meas)]
         S_pred = H @ P @ H.T
-        ti, pj, d = gate_pairs(z_pred, S_pred, plots, self.gamma)
+        ti, pj, d = gate_pairs(z_pred, S_pred, plots, self.gamma, self.model.angles)
         cost = np.full((idx.size, len(plots)), np.inf)
         cost[ti, pj] = d
         rows, cols, nn_amb = nearest_neighbour(cost)  # 001 [12]
         alpha, amb = self._crossing(t, idx, x, P, plots, rows, cols)
 
-        R = np.zeros((rows.size, 3, 3))
-        R[:, [0, 1, 2], [0, 1, 2]] = np.square(plots.sigma[cols])  # 001 [21]
-        innov = kalman.innovation(plots.y[cols], z_pred[rows], [AZ])  # 001 [27]
+        m = self.model.m
+        R = np.zeros((rows.size, m, m))
+        R[:, range(m), range(m)] = np.square(plots.sigma[cols])  # 001 [21]
+        innov = kalman.innovation(plots.y[cols], z_pred[rows], self.model.angles)  # 001 [27]
         x[rows], P[rows], _, _ = kalman.update(x[rows], P[rows], innov, H, R,
                                                gain_scale=alpha[rows])  # 001 [28]-[31]
-        x[:, 3] = wrap_2pi(x[:, 3])
+        for w in self.model.wrap:
+            x[:, w] = wrap_2pi(x[:, w])
         drop_acceleration(x, P, alpha == 0.0)
         tab.x[idx], tab.P[idx] = x, P
         tab.t_last[idx] = t
@@ -234,20 +254,22 @@ class ElementaryTracker:
         return self.report()
 
     def _predict(self, idx: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """001 [25]-[26] with F [19], Q [20] over each track's own time step."""
-        tab, p = self.table, self.params
+        """001 [25]-[26] with F [19], Q [20] (of the model) over each track's own time step."""
+        tab, p, model = self.table, self.params, self.model
         T = t - tab.t_last[idx]
-        x, P = kalman.predict(tab.x[idx], tab.P[idx], bistatic_F(T),
-                              bistatic_Q(T, p.sigma_gamma, p.sigma_omega))
-        x[:, 3] = wrap_2pi(x[:, 3])
+        x, P = kalman.predict(tab.x[idx], tab.P[idx], model.F(T),
+                              model.Q(T, p.sigma_gamma, p.sigma_omega))
+        for w in model.wrap:
+            x[:, w] = wrap_2pi(x[:, w])
         return x, P
 
     def _crossing(self, t: float, idx: np.ndarray, x: np.ndarray, P: np.ndarray,
                   plots: Plots, rows: np.ndarray, cols: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
-        """Seed 004 on the predicted (r_b, theta) of confirmed/coasting tracks: (alpha,
-        ambiguous) per track of idx; alpha = 1, not ambiguous for the others. The
-        density g has covariance R of the track's last plot on (r_b, theta) (004).
+        """Seed 004 on the predicted (r_b, theta) of confirmed/coasting tracks (r_b, v_b
+        at a range-Doppler base, a stated deviation): (alpha, ambiguous) per track of
+        idx; alpha = 1, not ambiguous for the others. The density g has covariance R of
+        the track's last plot on those components (004).
 
         Deviation (speed): only tracks with another one within NEAR_SIGMAS sigmas on
         both r_b and theta are passed to the CrossingManager, whose test is O(N^2).
@@ -259,17 +281,21 @@ class ElementaryTracker:
         sel = np.flatnonzero(self.table.status[idx] != Status.TENTATIVE)
         if not self.crossing_params.enabled or sel.size < 2:
             return alpha, amb
-        rc = [0, 3]
+        model = self.model
+        mc = list(model.cross)
+        rc = [model.meas[c] for c in mc]
         cov = np.zeros((sel.size, 2, 2))  # 004: g is the measurement noise density (R)
-        cov[:, [0, 1], [0, 1]] = self.table.r[idx[sel]][:, [0, AZ]]
-        near = neighbours(x[sel][:, rc], np.sqrt(cov[:, [0, 1], [0, 1]]), NEAR_SIGMAS)
+        cov[:, [0, 1], [0, 1]] = self.table.r[idx[sel]][:, mc]
+        near = neighbours(x[sel][:, rc], np.sqrt(cov[:, [0, 1], [0, 1]]), NEAR_SIGMAS,
+                          angle=bool(model.cross_angles))
         sel, cov = sel[near], cov[near]
         if sel.size == 0:
             return alpha, amb
         z_meas = np.full((idx.size, 2), np.nan)
-        z_meas[rows] = plots.y[cols][:, [0, AZ]]
+        z_meas[rows] = plots.y[cols][:, mc]
         alpha[sel], amb[sel] = self.crossing.step(
-            t, self.table.id[idx[sel]], x[sel][:, rc], cov, z_meas[sel], len(plots), angle_idx=[1])
+            t, self.table.id[idx[sel]], x[sel][:, rc], cov, z_meas[sel], len(plots),
+            angle_idx=model.cross_angles)
         return alpha, amb
 
     def _score(self, idx: np.ndarray, hit: np.ndarray, n_ch: np.ndarray,

@@ -71,6 +71,7 @@ import numpy as np
 from common.core import imm
 from common.core.crossing import CrossingManager, CrossingParams
 from common.core.gating import chi2_gate
+from common.core.rejection import Rejected
 from common.core.track_table import TrackTable
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracks
 from common.radar.fusion.assoc import (
@@ -104,6 +105,10 @@ class GlobalFusion:
                  tracker: ElementaryParams | None = None) -> None:
         """tracker: the elementary trackers' parameters ([radar.tracker]), for the F [19]
         and Q [20] of the decorrelation."""
+        no_az = [b.id for b in bases if not b.azimuth]
+        if no_az:
+            raise ValueError(f"global fusion (001 step 24) needs the azimuth of every base; "
+                             f"{', '.join(no_az)} declared azimuth = false (range-Doppler)")
         self.p = params or FusionParams()
         et = tracker or ElementaryParams()
         self.decorrelator = Decorrelator(et.sigma_gamma, et.sigma_omega,
@@ -148,7 +153,10 @@ class GlobalFusion:
     def push(self, base: str, tracks: ElementaryTracks, stale: frozenset[str] = frozenset()
              ) -> list[GlobalTracks]:
         """Buffer the report of one base (known, not late); run the cycles completed
-        by the bases not in `stale` (base ids), oldest first."""
+        by the bases not in `stale` (base ids), oldest first. Raises Rejected for the
+        3-state tracks of a range-Doppler base (no theta for 001 step 24)."""
+        if tracks.x.shape[1] != 5:
+            raise Rejected("no_azimuth", f"base {base}: elementary tracks without theta")
         self.pending.setdefault(tracks.t, {})[self.index[base]] = tracks
         need = {self.index[b] for b in self.base_ids if b not in stale}
         out = []

@@ -37,6 +37,9 @@ class BaseGeometry(Protocol):
     @property
     def rx(self) -> np.ndarray: ...
 
+    @property
+    def azimuth(self) -> bool: ...
+
 
 def norm3(d: np.ndarray) -> np.ndarray:
     """Euclidean norm over the last axis (of length 3): the value of np.linalg.norm(d,

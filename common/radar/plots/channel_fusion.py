@@ -4,7 +4,8 @@ Scan assembly: a scan at time t is complete when every configured channel has re
 t, or as soon as any channel reports a later time (missing channels count as empty).
 
 Module 31, aggregation: plots p1, p2 of different channels aggregate when their
-2-sigma intervals overlap on r_b, v_b and theta (001 [5]). Aggregates are the connected
+2-sigma intervals overlap on r_b, v_b and theta (001 [5]; on r_b and v_b only at a
+range-Doppler base, whose plots have no theta). Aggregates are the connected
 components of that relation, with one constraint: at most one plot per channel in an
 aggregate (two plots of one channel are never fused, directly or through a third plot).
 Within a component that would violate it, compatible pairs are merged closest pair
@@ -50,42 +51,58 @@ class PlotterParams(Params):
 @dataclass
 class Plots:
     """Columnar plots y = [rb, vb, az] with sigmas (001 [1]-[4]), plus n_ch per plot
-    (number of channels of a fused plot, 1 for a channel plot)."""
+    (number of channels of a fused plot, 1 for a channel plot). A range-Doppler base's
+    plots are y = [rb, vb]: az and saz are None (both or neither)."""
 
     rb: np.ndarray
     vb: np.ndarray
-    az: np.ndarray
+    az: np.ndarray | None
     srb: np.ndarray
     svb: np.ndarray
-    saz: np.ndarray
+    saz: np.ndarray | None
     n_ch: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def __post_init__(self) -> None:
+        if (self.az is None) != (self.saz is None):
+            raise ValueError("plots carry both az and saz or neither")
 
     def __len__(self) -> int:
         return int(self.rb.shape[0])
 
-    @classmethod
-    def empty(cls) -> "Plots":
-        z = np.zeros(0)
-        return cls(z, z, z, z, z, z, np.zeros(0, dtype=np.int64))
+    @property
+    def azimuth(self) -> bool:
+        """The plots measure theta (false: a range-Doppler base's)."""
+        return self.az is not None
 
     @classmethod
-    def concat(cls, parts: list["Plots"]) -> "Plots":
+    def empty(cls, azimuth: bool = True) -> "Plots":
+        z = np.zeros(0)
+        a = z if azimuth else None
+        return cls(z, z, a, z, z, a, np.zeros(0, dtype=np.int64))
+
+    @classmethod
+    def concat(cls, parts: list["Plots"], azimuth: bool = True) -> "Plots":
+        """The plots of parts, one after the other (all of the kind `azimuth`)."""
+        if any(p.azimuth != azimuth for p in parts):
+            raise ValueError("plots with and without azimuth cannot be concatenated")
         if not parts:
-            return cls.empty()
-        return cls(*(np.concatenate([getattr(p, c) for p in parts]) for c in COLUMNS + ("n_ch",)))
+            return cls.empty(azimuth)
+        return cls(*(None if getattr(parts[0], c) is None
+                     else np.concatenate([getattr(p, c) for p in parts]) for c in COLUMNS + ("n_ch",)))
 
     def take(self, idx: np.ndarray) -> "Plots":
-        return Plots(*(getattr(self, c)[idx] for c in COLUMNS + ("n_ch",)))
+        return Plots(*(None if getattr(self, c) is None else getattr(self, c)[idx]
+                       for c in COLUMNS + ("n_ch",)))
 
     @property
     def y(self) -> np.ndarray:
-        """Measurements (N, 3) = [rb, vb, az]."""
-        return np.column_stack([self.rb, self.vb, self.az])
+        """Measurements (N, 3) = [rb, vb, az], or (N, 2) = [rb, vb] without azimuth."""
+        return np.column_stack([self.rb, self.vb] + ([] if self.az is None else [self.az]))
 
     @property
     def sigma(self) -> np.ndarray:
-        """Standard deviations (N, 3)."""
-        return np.column_stack([self.srb, self.svb, self.saz])
+        """Standard deviations (N, 3), or (N, 2) without azimuth."""
+        return np.column_stack([self.srb, self.svb] + ([] if self.saz is None else [self.saz]))
 
 
 def compatible_pairs(p: Plots, channel: np.ndarray, n_sigma: float = 2.0
@@ -97,6 +114,9 @@ def compatible_pairs(p: Plots, channel: np.ndarray, n_sigma: float = 2.0
     a, b = a[keep], b[keep]
     d_rb = np.abs(p.rb[a] - p.rb[b]) / (n_sigma * (p.srb[a] + p.srb[b]))
     d_vb = np.abs(p.vb[a] - p.vb[b]) / (n_sigma * (p.svb[a] + p.svb[b]))
+    if p.az is None or p.saz is None:  # range-Doppler base: 001 [5] on r_b and v_b only
+        ok = d_vb <= 1.0
+        return a[ok], b[ok], np.maximum(d_rb, d_vb)[ok]
     d_az = np.abs(wrap_pi(p.az[a] - p.az[b])) / (n_sigma * (p.saz[a] + p.saz[b]))
     # 001 [5]: [y1 - 2s1, y1 + 2s1] and [y2 - 2s2, y2 + 2s2] intersect iff
     # |y1 - y2| <= 2 (s1 + s2); azimuth difference taken on the circle.
@@ -173,16 +193,22 @@ def fuse(p: Plots, labels: np.ndarray) -> Plots:
     (001 [6]-[7]), n_ch = number of plots (= channels) in the aggregate (module 34)."""
     k = int(labels.max()) + 1 if labels.size else 0
     if k == 0:
-        return Plots.empty()
+        return Plots.empty(p.azimuth)
     n_ch = np.bincount(labels, minlength=k)
     first = np.unique(labels, return_index=True)[1]
-    ref = p.az[first][labels]  # azimuths averaged as offsets from one member of each aggregate
+    comps = [(p.rb, p.srb), (p.vb, p.svb)]
+    if p.az is not None and p.saz is not None:
+        ref = p.az[first][labels]  # azimuths averaged as offsets from one member of each aggregate
+        comps.append((wrap_pi(p.az - ref), p.saz))
     out = []
-    for y, s in ((p.rb, p.srb), (p.vb, p.svb), (wrap_pi(p.az - ref), p.saz)):
+    for y, s in comps:
         w = 1.0 / np.square(s)  # R_j^-1, diagonal (001 [4])
         R = 1.0 / np.bincount(labels, weights=w, minlength=k)  # 001 [7]
         out.append((R * np.bincount(labels, weights=w * y, minlength=k), np.sqrt(R)))  # 001 [6]
-    (rb, srb), (vb, svb), (daz, saz) = out
+    (rb, srb), (vb, svb) = out[:2]
+    if p.az is None:
+        return Plots(rb, vb, None, srb, svb, None, n_ch.astype(np.int64))
+    daz, saz = out[2]
     az = wrap_2pi(p.az[first] + daz)
     return Plots(rb, vb, az, srb, svb, saz, n_ch.astype(np.int64))
 
@@ -194,21 +220,25 @@ def accept(fused: Plots, n_channels: int, p: int) -> Plots:
     return fused.take(np.flatnonzero(fused.n_ch >= n_channels - p))
 
 
-def fuse_scan(per_channel: list[Plots], n_channels: int, p: int, n_sigma: float = 2.0
-              ) -> Plots:
-    """Modules 31-34 on the channel plots of one scan (one Plots per channel)."""
-    plots = Plots.concat(per_channel)
+def fuse_scan(per_channel: list[Plots], n_channels: int, p: int, n_sigma: float = 2.0,
+              azimuth: bool = True) -> Plots:
+    """Modules 31-34 on the channel plots of one scan (one Plots per channel, all with
+    azimuth, or all without at a range-Doppler base)."""
+    plots = Plots.concat(per_channel, azimuth)
     channel = np.repeat(np.arange(len(per_channel)), [len(q) for q in per_channel])
     return accept(fuse(plots, aggregate(plots, channel, n_sigma)), n_channels, p)
 
 
 class PlotFusion:
-    """Scan assembly + modules 31-34 for one base; driven by message times only."""
+    """Scan assembly + modules 31-34 for one base; driven by message times only.
+    azimuth: the base's plots carry theta (false: a range-Doppler base)."""
 
-    def __init__(self, channels: list[str], p: int, params: PlotterParams | None = None) -> None:
+    def __init__(self, channels: list[str], p: int, params: PlotterParams | None = None,
+                 azimuth: bool = True) -> None:
         self.channels = list(channels)
         self.p = p
         self.params = params or PlotterParams()
+        self.azimuth = azimuth
         self._last = {c: -np.inf for c in self.channels}
         self._emitted = -np.inf
         self._newest = -np.inf
@@ -216,10 +246,14 @@ class PlotFusion:
 
     def push(self, channel: str, t: float, plots: Plots) -> list[tuple[float, Plots]]:
         """Add one channel's plots at time t; returns the scans completed by it, in time
-        order, as (t, fused plots). Raises Rejected for an unknown channel, a time not
-        after that channel's last, or a scan already emitted."""
+        order, as (t, fused plots). Raises Rejected for an unknown channel, plots of the
+        wrong kind (with / without azimuth), a time not after that channel's last, or a
+        scan already emitted."""
         if channel not in self._last:
             raise Rejected("unknown_channel", f"channel '{channel}' is not configured")
+        if plots.azimuth != self.azimuth:
+            raise Rejected("azimuth_mismatch", f"channel {channel}: plots with azimuth = "
+                           f"{plots.azimuth} at a base with azimuth = {self.azimuth}")
         if t <= self._last[channel]:
             raise Rejected("time_backwards", f"channel {channel}: t={t} after t={self._last[channel]}")
         if t <= self._emitted:
@@ -232,7 +266,8 @@ class PlotFusion:
         out = []
         for s in done:
             got = self._pending.pop(s)
-            per_channel = [got.get(c, Plots.empty()) for c in self.channels]
-            out.append((s, fuse_scan(per_channel, len(self.channels), self.p, self.params.n_sigma)))
+            per_channel = [got.get(c, Plots.empty(self.azimuth)) for c in self.channels]
+            out.append((s, fuse_scan(per_channel, len(self.channels), self.p, self.params.n_sigma,
+                                     self.azimuth)))
             self._emitted = s
         return out
