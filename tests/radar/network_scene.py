@@ -58,7 +58,8 @@ class Scene:
 
 def network(rng: np.random.Generator, n_rx: int = 8, span: float = 150e3) -> list[Base]:
     """n_rx receivers over span x span, each with 2-3 of its nearest transmitters of a
-    pool of n_rx + 2 (FM or DVB-T), period 0.5-1 s and a random phase."""
+    pool of n_rx + 2 (FM or DVB-T; 3 for the first half of the receivers, so >= 2.5
+    n_rx bases), period 0.5-1 s and a random phase."""
     rx = np.column_stack([rng.uniform(-span / 2, span / 2, (n_rx, 2)), rng.uniform(0, 600, n_rx)])
     n_tx = n_rx + 2
     tx = np.column_stack([rng.uniform(-0.6 * span, 0.6 * span, (n_tx, 2)),
@@ -68,7 +69,7 @@ def network(rng: np.random.Generator, n_rx: int = 8, span: float = 150e3) -> lis
     for i in range(n_rx):
         d = np.linalg.norm(tx[:, :2] - rx[i, :2], axis=1)
         d[d < 10e3] = np.inf  # no transmitter on the receiver's site
-        for j in np.argsort(d)[:int(rng.integers(2, 4))]:
+        for j in np.argsort(d)[:3 if i < n_rx // 2 else int(rng.integers(2, 4))]:
             sr, sv = DVBT if kind[j] else FM
             period = float(rng.uniform(0.5, 1.0))
             bases.append(Base(f"rx{i}tx{j}", tx[j], rx[i], sr, sv, period,
