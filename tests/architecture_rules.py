@@ -27,7 +27,7 @@ ALLOWED: dict[str, set[str]] = {
 }
 # role package -> its sub-packages, lowest first: each may import those before it
 SUBLAYERS: dict[str, list[str]] = {
-    "radar": ["geometry", "plots", "elementary", "fusion"],
+    "radar": ["geometry", "plots", "elementary", "fusion", "network"],
     "sonar": ["bearing", "mht", "tma"],
 }
 

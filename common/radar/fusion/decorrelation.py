@@ -27,6 +27,11 @@ form (G not positive definite on the measured components, or not zero outside th
 e.g. a missed report in between or a recycled track number), or z_eq is inconsistent
 with x~ beyond `gate` (chi-square(3)). A track seen for the first time contributes its
 own estimate (x, P) restricted to the measured components, once.
+
+The same differencing serves the range-Doppler tracks of multistatic networks
+(common.radar.network): a 3-state track [r_b, v_b, gamma_b] (F, Q the [r_b, v_b,
+gamma_b] blocks of [19], [20]) gives z_eq = [r_b, v_b], R_eq 2x2 (`measured`). The
+5-state path computes exactly what it computed before (same arrays, same operations).
 """
 
 from __future__ import annotations
@@ -41,13 +46,24 @@ from common.core.motion import bistatic_F, bistatic_Q
 
 IDX = np.array([0, 1, 3])  # [r_b, v_b, theta] in [r_b, v_b, gamma_b, theta, omega]
 THETA = 3
+RANGE_DOPPLER = IDX[:2]  # [r_b, v_b] in [r_b, v_b, gamma_b]
 OFF_TOL = 1e-5  # relative size of G outside the measured block still taken as zero
+
+
+def measured(n_state: int) -> np.ndarray:
+    """Measured components of an elementary state of n_state columns: [r_b, v_b, theta]
+    of the 5-state tracks of 001 [18], [r_b, v_b] of the 3-state range-Doppler ones."""
+    if n_state == 5:
+        return IDX
+    if n_state == 3:
+        return RANGE_DOPPLER
+    raise ValueError(f"elementary states have 3 or 5 columns, not {n_state}")
 
 
 @dataclass(frozen=True)
 class Equivalent:
-    """Per elementary track: z (E, 3) [r_b, v_b, theta], R (E, 3, 3), ok (E,) a
-    measurement of this scan exists."""
+    """Per elementary track: z (E, m) [r_b, v_b(, theta)], R (E, m, m), ok (E,) a
+    measurement of this scan exists (m = 3 for 5-state tracks, 2 for 3-state ones)."""
 
     z: np.ndarray
     R: np.ndarray
@@ -65,24 +81,28 @@ def equivalent(
     sigma_gamma: float, sigma_omega: float, gate: float,
 ) -> Equivalent:
     """Equivalent measurements (module doc) of N tracks from their previous (x0, P0)
-    and current (x, P) elementary states (N, 5), (N, 5, 5), dt (N,) apart."""
-    n = x.shape[0]
-    z = np.full((n, 3), np.nan)
-    R = np.full((n, 3, 3), np.nan)
+    and current (x, P) elementary states (N, s), (N, s, s), dt (N,) apart, s = 5 or 3
+    (the leading blocks of F [19] and Q [20] for s = 3)."""
+    n, s = x.shape
+    idx = measured(s)
+    m = idx.size
+    z = np.full((n, m), np.nan)
+    R = np.full((n, m, m), np.nan)
     if n == 0:
         return Equivalent(z, R, np.zeros(0, dtype=bool))
-    F = bistatic_F(dt)
+    F = bistatic_F(dt)[:, :s, :s]
     xp = (F @ x0[..., None])[..., 0]  # 001 [19], [25]
-    Pp = F @ P0 @ np.swapaxes(F, 1, 2) + bistatic_Q(dt, sigma_gamma, sigma_omega)  # [20], [26]
+    Q = bistatic_Q(dt, sigma_gamma, sigma_omega)[:, :s, :s]
+    Pp = F @ P0 @ np.swapaxes(F, 1, 2) + Q  # [20], [26]
     d = 1.0 / np.sqrt(np.diagonal(Pp, axis1=1, axis2=2))
     Ii, Ip = _scaled_inv(P, d), _scaled_inv(Pp, d)
     G = Ii - Ip
     Gs = G * (1.0 / d)[:, :, None] * (1.0 / d)[:, None, :]  # in units of P~'s sigmas
-    other = np.setdiff1d(np.arange(5), IDX)
-    g_meas = Gs[:, IDX][:, :, IDX]
+    other = np.setdiff1d(np.arange(s), idx)
+    g_meas = Gs[:, idx][:, :, idx]
     scale = np.abs(g_meas).max(axis=(1, 2))
     off = np.abs(Gs[:, other]).max(axis=(1, 2))
-    Gm = G[:, IDX][:, :, IDX]
+    Gm = G[:, idx][:, :, idx]
     Gm = 0.5 * (Gm + np.swapaxes(Gm, 1, 2))
     ok = (np.linalg.eigvalsh(g_meas)[:, 0] > 1e-9 * np.maximum(scale, 1e-300)) & (off <= OFF_TOL * scale)
     if not ok.any():
@@ -90,12 +110,14 @@ def equivalent(
     k = np.flatnonzero(ok)
     Rk = np.linalg.inv(Gm[k])
     dx = x[k] - xp[k]
-    dx[:, THETA] = wrap_pi(dx[:, THETA])
-    v = (Rk @ (Ii[k] @ dx[..., None])[:, IDX])[..., 0]  # z_eq - H x~
-    S = Pp[k][:, IDX][:, :, IDX] + Rk
+    if m == 3:
+        dx[:, THETA] = wrap_pi(dx[:, THETA])
+    v = (Rk @ (Ii[k] @ dx[..., None])[:, idx])[..., 0]  # z_eq - H x~
+    S = Pp[k][:, idx][:, :, idx] + Rk
     nis = quadratic_form(v, S)
-    z[k] = xp[k][:, IDX] + v
-    z[k, 2] = wrap_2pi(z[k, 2])
+    z[k] = xp[k][:, idx] + v
+    if m == 3:
+        z[k, 2] = wrap_2pi(z[k, 2])
     R[k] = Rk
     ok[k] = nis <= gate
     z[~ok], R[~ok] = np.nan, np.nan
@@ -114,8 +136,8 @@ class Decorrelator:
 
     def step(self, base: int, t: float, ids: np.ndarray, x: np.ndarray, P: np.ndarray,
              updated: np.ndarray, ambiguous: np.ndarray) -> Equivalent:
-        """The report of base `base` at t: track numbers (E,), states (E, 5), (E, 5, 5),
-        flags (E,). Tracks absent from the report are forgotten."""
+        """The report of base `base` at t: track numbers (E,), states (E, s), (E, s, s)
+        (s = 5 or 3), flags (E,). Tracks absent from the report are forgotten."""
         return self.step_bases(t, [base], np.full(ids.size, base), ids, x, P, updated, ambiguous)
 
     def step_bases(self, t: float, reported: list[int], base: np.ndarray, ids: np.ndarray,
@@ -124,8 +146,9 @@ class Decorrelator:
         """`step` for the reports at t of the bases `reported`, row k of base base[k]
         (E,): one `equivalent` over all of them (per-row arithmetic: the same values)."""
         n = ids.size
-        z = np.full((n, 3), np.nan)
-        R = np.full((n, 3, 3), np.nan)
+        idx = measured(x.shape[1])
+        z = np.full((n, idx.size), np.nan)
+        R = np.full((n, idx.size, idx.size), np.nan)
         ok = np.zeros(n, dtype=bool)
         seen = np.zeros(n, dtype=bool)
         rows, x0, P0, dt = [], [], [], []
@@ -149,7 +172,7 @@ class Decorrelator:
                             P[use], self.sigma_gamma, self.sigma_omega, self.gate)
             z[use], R[use], ok[use] = eq.z, eq.R, eq.ok
         first = ~seen & updated & ~ambiguous
-        z[first] = x[first][:, IDX]
-        R[first] = P[first][:, IDX][:, :, IDX]
+        z[first] = x[first][:, idx]
+        R[first] = P[first][:, idx][:, :, idx]
         ok[first] = True
         return Equivalent(z, R, ok)

@@ -1,0 +1,217 @@
+"""`NetworkFusion`: global tracks of a multistatic network from unsynchronised base
+reports (docs/networks.md).
+
+push(base, t, ElementaryTracks) buffers a report; reports leave the reordering window
+(`window` s behind the newest stamp) in time order and each runs one step at its own
+time t (no common scan time):
+  1. equivalent measurements of the report (common.radar.fusion.decorrelation, 3-state
+     [r_b, v_b] or 5-state [r_b, v_b, theta] tracks); clock: R_rr += (v_b clock_sigma)^2,
+     the range error v_b dt of a stamp dt off;
+  2. every global track predicted to t (CV, 001 [51]: cv_F, cv_Q);
+  3. a member's measurement is gated (chi-square, S = H P~ H' + R, H the rows of 001
+     [47]'s Jacobian) on its own track; outside the gate it counts a miss (released
+     after member_misses); an unassigned confirmed elementary track is gated on every
+     track without a member of this base and assigned by global nearest neighbour;
+  4. one batched EKF update (001 [55]-[62], common.core.kalman) of the tracks hit;
+  5. bookkeeping: a cycle with updates from >= 3 bases over >= 2 receivers counts one
+     hit, confirm_cycles hits confirm; deletion after coast (coast_tentative) s;
+  6. every init_period s, initiation (common.radar.network.initiation) on the
+     leftovers of all bases predicted to t; a candidate inside the gate of an
+     existing track is not opened;
+  7. every report_period s, a `NetworkReport` of all live tracks predicted to t.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from common.core import kalman
+from common.core.assignment import gnn
+from common.core.gating import chi2_gate, pair_distances
+from common.core.motion import bistatic_F, bistatic_Q
+from common.core.rejection import Rejected
+from common.core.track_table import Status
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.fusion.decorrelation import Decorrelator
+from common.radar.geometry.bistatic import BaseGeometry, project, project_jacobian
+from common.radar.network.initiation import Leftovers, Sites, initiate
+from common.radar.network.params import NetworkParams
+from common.radar.network.tracks import Tracks
+
+
+@dataclass(frozen=True)
+class NetworkReport:
+    """Live global tracks at t: id, status (Status codes), x (N, 6), P (N, 6, 6),
+    n_bases (N,) members."""
+
+    t: float
+    id: np.ndarray
+    status: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    n_bases: np.ndarray
+
+
+def anchor_triples(receiver: np.ndarray) -> list[tuple[int, int, int]]:
+    """Base triples over 3 receivers (over 2 when the network has only 2)."""
+    need = min(3, np.unique(receiver).size)
+    return [c for c in itertools.combinations(range(receiver.size), 3)
+            if np.unique(receiver[list(c)]).size >= need]
+
+
+class NetworkFusion:
+    """The fusion centre (module doc); `rejected` counts refused reports by reason,
+    `waiting` the gated triples deferred by max_triples."""
+
+    def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None
+                 ) -> None:
+        self.p = params or NetworkParams()
+        self.ids = [b.id for b in bases]
+        rx = np.array([b.rx for b in bases], dtype=float)
+        _, rec = np.unique(np.round(rx, 3), axis=0, return_inverse=True)
+        self.sites = Sites(np.array([b.tx for b in bases], dtype=float), rx, rec.ravel())
+        self.triples = anchor_triples(self.sites.receiver)
+        self.next_triple = 0
+        self.dec = Decorrelator(self.p.sigma_gamma, self.p.sigma_omega, self.p.decor_gate)
+        self.tracks = Tracks(self.p, self.sites.receiver)
+        self.heap: list[tuple[float, int, int, ElementaryTracks]] = []
+        self.serial = 0
+        self.newest = -np.inf
+        self.done = -np.inf
+        self.last: dict[int, ElementaryTracks] = {}
+        self.last_init = -np.inf
+        self.next_report = -np.inf
+        self.rejected: dict[str, int] = {}
+        self.waiting = 0
+
+    def _reject(self, reason: str, detail: str) -> Rejected:
+        self.rejected[reason] = self.rejected.get(reason, 0) + 1
+        return Rejected(reason, detail)
+
+    def push(self, base: str, t: float, tracks: ElementaryTracks) -> list[NetworkReport]:
+        """Buffer the report of `base` stamped t; run every report that left the window."""
+        if base not in self.ids:
+            raise self._reject("unknown_base", base)
+        if t <= self.done:
+            raise self._reject("too_late", f"{base} at {t:.3f} s, processed up to {self.done:.3f} s")
+        if tracks.x.ndim != 2 or tracks.x.shape[1] not in (3, 5):
+            raise self._reject("state_size", f"{base}: x of shape {tracks.x.shape}")
+        self.serial += 1
+        heapq.heappush(self.heap, (t, self.serial, self.ids.index(base), tracks))
+        self.newest = max(self.newest, t)
+        return self._drain(self.newest - self.p.window)
+
+    def flush(self) -> list[NetworkReport]:
+        """Run every buffered report (end of input)."""
+        return self._drain(np.inf)
+
+    def _drain(self, until: float) -> list[NetworkReport]:
+        out: list[NetworkReport] = []
+        while self.heap and self.heap[0][0] <= until:
+            t, _, b, tr = heapq.heappop(self.heap)
+            self.done = t
+            out += self._step(b, t, tr)
+        return out
+
+    def _step(self, b: int, t: float, tr: ElementaryTracks) -> list[NetworkReport]:
+        """Steps 1-7 of the module doc for one report."""
+        eq = self.dec.step(b, t, tr.id, tr.x, tr.P, tr.updated, tr.ambiguous)
+        R = eq.R.copy()
+        R[:, 0, 0] += (eq.z[:, 1] * self.p.clock_sigma) ** 2
+        self.last[b] = tr
+        T = self.tracks
+        T.release_absent(b, tr.id)
+        xp, Pp = T.predicted(t)
+        m = eq.z.shape[1]
+        rows = np.flatnonzero(eq.ok)
+        trk = np.array([T.member_of(b, int(e)) for e in tr.id[rows]], dtype=int)
+        mem, free = rows[trk >= 0], rows[(trk < 0) & (tr.status[rows] == Status.CONFIRMED)]
+        trk = trk[trk >= 0]
+        h = project(xp, self.sites.tx[b], self.sites.rx[b])[:, :m] if len(T) else np.zeros((0, m))
+        H = project_jacobian(xp, self.sites.tx[b], self.sites.rx[b])[:, :m] if len(T) else \
+            np.zeros((0, m, 6))
+        A = H @ Pp @ np.swapaxes(H, 1, 2)
+        ang = [2] if m == 3 else []
+        gam = chi2_gate(self.p.gate_prob, m)
+        _, _, d2 = pair_distances(h, A, eq.z, R, trk, mem, ang)
+        hit = d2 <= gam
+        T.count_misses(b, tr.id[mem[~hit]])
+        up_t, up_r = list(trk[hit]), list(mem[hit])
+        cand = np.flatnonzero(~T.has_base(b))
+        if free.size and cand.size:
+            ti, ji = np.repeat(cand, free.size), np.tile(free, cand.size)
+            _, _, d2f = pair_distances(h, A, eq.z, R, ti, ji, ang)
+            cost = np.full((cand.size, free.size), np.inf)
+            cost.ravel()[d2f <= gam] = d2f[d2f <= gam]
+            r_i, c_i = gnn(cost)
+            for a, c in zip(cand[r_i], free[c_i]):
+                T.add_member(int(a), b, int(tr.id[c]))
+                up_t.append(int(a))
+                up_r.append(int(c))
+        if up_t:
+            k, r = np.array(up_t), np.array(up_r)
+            x, P, _, _ = kalman.ekf_update(xp[k], Pp[k], eq.z[r], h[k], H[k], R[r], ang)
+            T.updated(k, t, x, P, b)
+        T.bookkeep(t)
+        if t - self.last_init >= self.p.init_period:
+            self.last_init = t
+            self._initiate(t)
+        return self._report(t)
+
+    def _leftovers(self, t: float) -> Leftovers:
+        """Confirmed non-member elementary tracks of fresh reports, [r_b, v_b] at t."""
+        parts = []
+        for b, tr in self.last.items():
+            dt = t - tr.t
+            keep = (tr.status == Status.CONFIRMED) & ~self.tracks.is_member(b, tr.id)
+            if dt > self.p.stale or not keep.any():
+                continue
+            F = bistatic_F(dt)[:3, :3]
+            x = tr.x[keep][:, :3] @ F.T
+            P = F @ tr.P[keep][:, :3, :3] @ F.T + bistatic_Q(dt, self.p.sigma_gamma, 0.0)[:3, :3]
+            R = P[:, :2, :2].copy()
+            R[:, 0, 0] += (x[:, 1] * self.p.clock_sigma) ** 2
+            parts.append((np.full(x.shape[0], b), tr.id[keep], x[:, :2], R))
+        if not parts:
+            return Leftovers(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)),
+                             np.zeros((0, 2, 2)))
+        return Leftovers(*(np.concatenate(c) for c in zip(*parts)))
+
+    def _initiate(self, t: float) -> None:
+        """Step 6: the next anchor triple whose bases all have leftovers."""
+        left = self._leftovers(t)
+        with_left = np.unique(left.base)
+        if with_left.size < 3 or np.unique(self.sites.receiver[with_left]).size < 2:
+            return
+        required = max(3, min(self.p.init_bases, with_left.size))
+        for _ in range(len(self.triples)):
+            anchors = self.triples[self.next_triple]
+            self.next_triple = (self.next_triple + 1) % len(self.triples)
+            if np.isin(anchors, with_left).all():
+                break
+        else:
+            return
+        opened, waiting = initiate(left, self.sites, anchors, required, self.p)
+        self.waiting += waiting
+        for c in range(opened.members.shape[0]):
+            x, P = opened.fix.x[c], opened.fix.P[c]
+            if self.tracks.near(t, x, P):
+                continue
+            mem = [(int(b), int(left.eid[i])) for b, i in enumerate(opened.members[c]) if i >= 0]
+            self.tracks.open(t, x, P, mem)
+
+    def _report(self, t: float) -> list[NetworkReport]:
+        """Step 7."""
+        if t < self.next_report:
+            return []
+        self.next_report = max(self.next_report + self.p.report_period, t) \
+            if np.isfinite(self.next_report) else t + self.p.report_period
+        T = self.tracks
+        x, P = T.predicted(t)
+        return [NetworkReport(t, T.id.copy(), T.status.copy(), x, P, T.n_bases())]
+

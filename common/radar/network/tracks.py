@@ -1,0 +1,146 @@
+"""The global tracks of `NetworkFusion`: CV states [x vx y vy z vz], members (base,
+elementary id), exclusive (an elementary track belongs to at most one global track, a
+global track holds at most one elementary track per base), and the confirmation and
+deletion rules of docs/networks.md."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from common.core import kalman
+from common.core.gating import chi2_gate, quadratic_form
+from common.core.motion import cv_F, cv_Q
+from common.core.track_table import Status
+from common.radar.geometry.bistatic import POS
+from common.radar.network.params import NetworkParams
+
+
+class Tracks:
+    """Rows in ascending id; columns id, status, x, P, t (state time), t_update, born,
+    hits (qualifying cycles), cycle_start, and per row its cycle's bases and members."""
+
+    def __init__(self, params: NetworkParams, receiver: np.ndarray) -> None:
+        self.p = params
+        self.receiver = receiver
+        self.next_id = 1
+        self.id = np.zeros(0, dtype=np.int64)
+        self.status = np.zeros(0, dtype=np.int64)
+        self.x = np.zeros((0, 6))
+        self.P = np.zeros((0, 6, 6))
+        self.t = np.zeros(0)
+        self.t_update = np.zeros(0)
+        self.born = np.zeros(0)
+        self.hits = np.zeros(0, dtype=np.int64)
+        self.cycle_start = np.zeros(0)
+        self.cycle_bases: list[set[int]] = []
+        self.members: list[dict[int, int]] = []
+        self.owner: dict[tuple[int, int], int] = {}  # (base, eid) -> track id
+        self.misses: dict[tuple[int, int], int] = {}
+
+    def __len__(self) -> int:
+        return int(self.id.size)
+
+    def predicted(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """All tracks predicted to t (001 [51], [25]-[26])."""
+        dt = np.maximum(t - self.t, 0.0)
+        return kalman.predict(self.x, self.P, cv_F(dt), cv_Q(dt, self.p.q, self.p.q_z))
+
+    def _row(self, tid: int) -> int:
+        return int(np.searchsorted(self.id, tid))
+
+    def member_of(self, b: int, eid: int) -> int:
+        """Row of the track holding (b, eid), or -1."""
+        tid = self.owner.get((b, eid))
+        return -1 if tid is None else self._row(tid)
+
+    def is_member(self, b: int, eids: np.ndarray) -> np.ndarray:
+        return np.array([(b, int(e)) in self.owner for e in eids], dtype=bool)
+
+    def has_base(self, b: int) -> np.ndarray:
+        """(N,) tracks holding a member of base b."""
+        return np.array([b in m for m in self.members], dtype=bool)
+
+    def n_bases(self) -> np.ndarray:
+        return np.array([len(m) for m in self.members], dtype=np.int64)
+
+    def _release(self, b: int, eid: int) -> None:
+        tid = self.owner.pop((b, eid), None)
+        self.misses.pop((b, eid), None)
+        if tid is not None:
+            self.members[self._row(tid)].pop(b, None)
+
+    def release_absent(self, b: int, eids: np.ndarray) -> None:
+        """Members of base b whose elementary track is no longer reported."""
+        now = set(eids.tolist())
+        for key in [k for k in self.owner if k[0] == b and k[1] not in now]:
+            self._release(*key)
+
+    def count_misses(self, b: int, eids: np.ndarray) -> None:
+        """Out-of-gate reports of members; released after member_misses in a row."""
+        for e in eids.tolist():
+            n = self.misses.get((b, e), 0) + 1
+            self.misses[(b, e)] = n
+            if n >= self.p.member_misses:
+                self._release(b, e)
+
+    def add_member(self, row: int, b: int, eid: int) -> None:
+        self.members[row][b] = eid
+        self.owner[(b, eid)] = int(self.id[row])
+
+    def updated(self, rows: np.ndarray, t: float, x: np.ndarray, P: np.ndarray, b: int) -> None:
+        """Rows updated at t by base b."""
+        self.x[rows], self.P[rows], self.t[rows], self.t_update[rows] = x, P, t, t
+        for r in rows.tolist():
+            self.cycle_bases[r].add(b)
+            self.misses.pop((b, self.members[r][b]), None)
+
+    def open(self, t: float, x: np.ndarray, P: np.ndarray, members: list[tuple[int, int]]) -> None:
+        """A tentative track at t with its members."""
+        self.id = np.append(self.id, self.next_id)
+        self.status = np.append(self.status, Status.TENTATIVE)
+        self.x = np.vstack([self.x, x[None]])
+        self.P = np.concatenate([self.P, P[None]])
+        for name in ("t", "t_update", "born", "cycle_start"):
+            setattr(self, name, np.append(getattr(self, name), t))
+        self.hits = np.append(self.hits, 0)
+        self.cycle_bases.append(set())
+        self.members.append({})
+        for b, e in members:
+            self.add_member(len(self) - 1, b, e)
+        self.next_id += 1
+
+    def near(self, t: float, x: np.ndarray, P: np.ndarray) -> bool:
+        """A track whose predicted position is within the chi-square(3) gate of x."""
+        if not len(self):
+            return False
+        xp, Pp = self.predicted(t)
+        y = xp[:, POS] - x[POS]
+        S = Pp[:, POS][:, :, POS] + P[POS][:, POS]
+        d2 = quadratic_form(y, S)
+        return bool((d2 <= chi2_gate(self.p.gate_prob, 3)).any())
+
+    def bookkeep(self, t: float) -> None:
+        """Cycles, confirmation, coasting and deletion at t."""
+        p = self.p
+        for r in np.flatnonzero(t - self.cycle_start >= p.cycle).tolist():
+            bs = list(self.cycle_bases[r])
+            if len(bs) >= 3 and np.unique(self.receiver[bs]).size >= 2:
+                self.hits[r] += 1
+            self.cycle_bases[r] = set()
+            self.cycle_start[r] = t
+        tent = self.status == Status.TENTATIVE
+        self.status[tent & (self.hits >= p.confirm_cycles)] = Status.CONFIRMED
+        tent = self.status == Status.TENTATIVE
+        idle = t - self.t_update
+        live = ~tent
+        self.status[live & (idle > 2 * p.cycle)] = Status.COASTING
+        self.status[live & (idle <= 2 * p.cycle)] = Status.CONFIRMED
+        too_old = tent & (t - self.born > (p.confirm_cycles + 2) * p.cycle)
+        dead = (live & (idle > p.coast)) | (tent & (idle > p.coast_tentative)) | too_old
+        for r in np.flatnonzero(dead)[::-1].tolist():
+            for b, e in list(self.members[r].items()):
+                self._release(b, e)
+            del self.cycle_bases[r], self.members[r]
+        keep = ~dead
+        for name in ("id", "status", "x", "P", "t", "t_update", "born", "hits", "cycle_start"):
+            setattr(self, name, getattr(self, name)[keep])

@@ -1,0 +1,143 @@
+"""NetworkFusion on the synthetic network of tests/radar/network_scene.py (>= 8
+receivers, >= 20 bases over ~150 km, range-Doppler only, unsynchronised, pd 0.9,
+elementary reports from per-base Kalman filters on simulated plots), seeds 1-3.
+
+After a 15 s warm-up, at every global report: every aircraft held by exactly one
+confirmed track (within 2 km), no confirmed track farther than 2 km from every
+aircraft, per-aircraft position RMSE <= 1.3 x the rms of its single-snapshot CRLB (one
+report of every base, `crlb_position`). Ghost scene: 24 aircraft on a line across the
+network, confirmed false tracks < 1 % of the aircraft per report."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from common.core.rejection import Rejected
+from common.core.track_table import Status
+from common.radar.elementary.tracker import ElementaryTracks
+from common.radar.network.fusion import NetworkFusion, NetworkReport
+from tests.radar import network_scene as ns
+
+WARM_UP = 15.0
+NEAR = 2000.0  # m
+
+
+@dataclasses.dataclass
+class Score:
+    """Counts over the reports after warm-up; err2, crlb2 per aircraft (mean squares)."""
+
+    missed: int
+    duplicates: int
+    false: int
+    scans: int
+    err2: np.ndarray
+    crlb2: np.ndarray
+    nees: float
+
+
+def score(scene: ns.Scene, reports: list[NetworkReport]) -> Score:
+    n = scene.p0.shape[0]
+    missed = dup = false = scans = 0
+    err2, crlb2, cnt = np.zeros(n), np.zeros(n), np.zeros(n)
+    nees: list[np.ndarray] = []
+    for rep in reports:
+        if rep.t < WARM_UP:
+            continue
+        scans += 1
+        pos, vel = scene.truth(rep.t)
+        conf = rep.status != Status.TENTATIVE
+        X = rep.x[conf][:, [0, 2, 4]]
+        d = np.linalg.norm(X[:, None] - pos[None], axis=2)
+        a, near = d.argmin(axis=1), d.min(axis=1)
+        false += int((near > NEAR).sum())
+        held = np.bincount(a[near <= NEAR], minlength=n)
+        missed += int((held == 0).sum())
+        dup += int((held > 1).sum())
+        ok = near <= NEAR
+        e = X[ok] - pos[a[ok]]
+        np.add.at(err2, a[ok], np.sum(e ** 2, axis=1))
+        np.add.at(crlb2, a[ok], ns.crlb_position(scene.bases, pos[a[ok]], vel[a[ok]]) ** 2)
+        np.add.at(cnt, a[ok], 1)
+        C = rep.P[conf][ok][:, [0, 2, 4]][:, :, [0, 2, 4]]
+        nees.append(np.einsum("ni,ni->n", e, np.linalg.solve(C, e[..., None])[..., 0]))
+    c = np.maximum(cnt, 1)
+    return Score(missed, dup, false, scans, err2 / c, crlb2 / c,
+                 float(np.concatenate(nees).mean()) if nees else np.nan)
+
+
+def run(seed: int, kind: str = "random", clock: float = 0.0, duration: float = 45.0
+        ) -> tuple[ns.Scene, list[NetworkReport], NetworkFusion]:
+    rng = np.random.default_rng(seed)
+    bases = ns.network(rng)
+    if clock:
+        bases = [dataclasses.replace(b, clock=float(rng.uniform(-clock, clock))) for b in bases]
+    p0, v = ns.aircraft(rng, 20) if kind == "random" else ns.line(24)
+    scene = ns.simulate(rng, bases, p0, v, duration)
+    fusion = NetworkFusion(bases)
+    out: list[NetworkReport] = []
+    for b, t, rep in scene.reports:
+        out += fusion.push(bases[b].id, t, rep)
+    return scene, out + fusion.flush(), fusion
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_every_aircraft_held_accurately(seed: int) -> None:
+    scene, reports, fusion = run(seed)
+    assert len(scene.bases) >= 20 and len({tuple(b.rx) for b in scene.bases}) >= 8
+    s = score(scene, reports)
+    assert s.scans >= 25 and fusion.rejected == {}
+    assert (s.missed, s.duplicates, s.false) == (0, 0, 0)
+    ratio = np.sqrt(s.err2 / s.crlb2)
+    assert ratio.max() <= 1.3, ratio
+    assert 1.0 < s.nees < 6.0, s.nees
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_ghost_line(seed: int) -> None:
+    scene, reports, _ = run(seed, "line")
+    s = score(scene, reports)
+    assert s.false < 0.01 * 24 * s.scans
+    assert s.missed == 0
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_clock_offsets_up_to_0_2_s(seed: int) -> None:
+    """Node clocks off by up to 0.2 s, absorbed as R_rr += (v_b clock_sigma)^2: every
+    aircraft held, no false track. Not asserted: the RMSE goal (a constant offset is a
+    bias, not white noise; it pulls the weakly observed altitude, docs/networks.md)."""
+    scene, reports, _ = run(seed, clock=0.2)
+    s = score(scene, reports)
+    assert (s.missed, s.duplicates, s.false) == (0, 0, 0)
+
+
+def test_reordering_window() -> None:
+    rng = np.random.default_rng(5)
+    bases = ns.network(rng)
+    p0, v = ns.aircraft(rng, 3)
+    scene = ns.simulate(rng, bases, p0, v, 12.0, latency=1.5)  # out of order within 2 s
+    fusion = NetworkFusion(bases)
+    times = []
+    for b, t, rep in scene.reports:
+        times += [r.t for r in fusion.push(bases[b].id, t, rep)]
+    assert fusion.rejected == {} and times == sorted(times)
+    b, t, rep = scene.reports[0]
+    with pytest.raises(Rejected) as err:
+        fusion.push(bases[b].id, t, rep)
+    assert err.value.reason == "too_late" and fusion.rejected == {"too_late": 1}
+
+
+def test_five_state_reports_accepted() -> None:
+    bases = ns.network(np.random.default_rng(6))
+    fusion = NetworkFusion(bases)
+    x = np.array([[60e3, -100.0, 0.0, 1.0, 0.0]])
+    rep = ElementaryTracks(0.0, np.array([1]), np.array([Status.CONFIRMED]), x,
+                           np.diag([1e4, 1.0, 1.0, 1e-4, 1e-6])[None], np.zeros(1),
+                           np.ones(1, dtype=np.int64), np.array([True]), np.array([False]))
+    fusion.push(bases[0].id, 0.0, rep)
+    assert fusion.flush()[0].x.shape == (0, 6)
+    assert fusion.dec.last[0][2].shape == (1, 5)
+    with pytest.raises(Rejected):
+        fusion.push(bases[0].id, 1.0, dataclasses.replace(rep, x=x[:, :4]))
