@@ -131,7 +131,7 @@ from common.evaluation.pcrlb import Evaluation, score_targets
 from common.radar.fusion.params import FusionParams
 from common.sim.simulator import load_scenario
 from common.wire.radar_chain import RadarChain
-from common.wire.radar_messages import gtracks_message, plots_of
+from common.wire.radar_messages import confirmed_tracks, gtracks_message, plots_of
 from common.wire.sim_messages import run_scenario, truth_state
 
 REPO = Path(__file__).resolve().parents[1]
@@ -220,11 +220,8 @@ def run(name: str, seed: int, scans: int | None, fusion: dict[str, Any] | None =
                 t1 = time.process_time()
                 cost["fusion"] += t1 - t2
         g = next((m for m in out if m["t"] == t), {"tracks": []})
-        conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
-        ev.add(t, np.asarray(truth["id"]), truth_state(truth),
-                     np.array([k["id"] for k in conf], dtype=np.int64),
-                     np.array([k["x"] for k in conf]).reshape(-1, 6),
-                     np.array([k["P"] for k in conf]).reshape(-1, 6, 6))
+        conf = confirmed_tracks(g)
+        ev.add(t, np.asarray(truth["id"]), truth_state(truth), *conf)
         res = ev.metrics.gospa_series[-1]
         for b, tracks in etracks:  # the diagnostic by origin (benchmarks/origin_switches)
             if tracks.t in truths:
@@ -238,7 +235,7 @@ def run(name: str, seed: int, scans: int | None, fusion: dict[str, Any] | None =
             n_truth = len(truth["id"])
             present.append(n_truth)
             missed.append(n_truth - res.rows.size)
-            false.append(len(conf) - res.rows.size)
+            false.append(len(conf[0]) - res.rows.size)
     p = section(cfg, "radar.fusion", FusionParams)
     s = ev.metrics.summary()
     joint = ev.metrics.joint_associations()

@@ -24,6 +24,7 @@ from common.evaluation.pcrlb import Evaluation, base_information, monte_carlo_ne
 from common.radar.fusion.params import FusionParams
 from common.sim.scenario import load_scenario, radar_scene
 from common.wire.radar_chain import RadarChain
+from common.wire.radar_messages import confirmed_tracks
 from common.wire.sim_messages import run_scenario, truth_state
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
@@ -40,11 +41,7 @@ def one_run(path: Path, seed: int) -> Evaluation:
     for _, msgs in run_scenario(scn, cfg.bases, cfg.arrays, seed):
         truth = next(m for k, m in msgs if k == "sim/truth/radar")
         for g in chain.step(msgs):
-            conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
-            ev.add(g["t"], np.asarray(truth["id"]), truth_state(truth),
-                   np.array([k["id"] for k in conf], dtype=np.int64),
-                   np.array([k["x"] for k in conf]).reshape(-1, 6),
-                   np.array([k["P"] for k in conf]).reshape(-1, 6, 6))
+            ev.add(g["t"], np.asarray(truth["id"]), truth_state(truth), *confirmed_tracks(g))
     return ev
 
 

@@ -160,3 +160,12 @@ def gtracks_message(g: GlobalTracks, origin: LocalFrame | None = None) -> dict[s
         for track, la, lo, h in zip(msg["tracks"], lat, lon, alt):
             track.update(lat=la, lon=lo, alt=h)
     return msg
+
+
+def confirmed_tracks(msg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The confirmed tracks of a decoded `radar/gtracks` message, as scored against truth:
+    ids (m,), x (m, 6) [x vx y vy z vz], P (m, 6, 6)."""
+    conf = [k for k in msg["tracks"] if k["status"] == "confirmed"]
+    return (np.array([k["id"] for k in conf], dtype=np.int64),
+            np.array([k["x"] for k in conf], dtype=float).reshape(-1, 6),
+            np.array([k["P"] for k in conf], dtype=float).reshape(-1, 6, 6))

@@ -4,7 +4,8 @@ at the end: GOSPA (with switching term) and OSPA, track number switches and brea
 run, common.evaluation.trajectory_gospa), position RMSE against the PCRLB and NEES (common.evaluation.pcrlb).
 
 Subscribes radar/gtracks, sim/truth/radar and sim/status; pairs tracks and truth by
-message time; only confirmed global tracks are scored. Stops on SIGTERM/SIGINT, or
+message time (common.evaluation.pairing); only confirmed global tracks are scored; with
+no step scored it says so and exits 1. Stops on SIGTERM/SIGINT, or
 once sim/status says "done" and nothing arrived for --quiet seconds; then prints the
 final table on stdout. The PCRLB needs the scenario part ([sim.radar]) of the config
 for the channel accuracies and detection probabilities.
@@ -23,10 +24,12 @@ from common.bus.service import Service
 from common.cli import add_common, load_config
 from common.deploy.config import Config, section
 from common.evaluation.metrics import count_switches
+from common.evaluation.pairing import StepPairing
 from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.radar.fusion.params import FusionParams
 from common.sim.scenario import radar_scene
 from common.wire import protocol
+from common.wire.radar_messages import confirmed_tracks
 from common.wire.sim_messages import truth_state
 
 
@@ -74,39 +77,31 @@ def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
     ev = Evaluation(c=args.cutoff, gamma=args.cutoff)
     svc = Service("evaluate", "main", cfg)
-    truth: dict[float, dict[str, Any]] = {}
-    tracks: dict[float, dict[str, Any]] = {}
+    pairing: StepPairing[dict[str, Any], dict[str, Any]] = StepPairing()
     state = {"done": False, "last": time.monotonic()}
 
-    def score(t: float) -> None:
-        m, g = truth.pop(t), tracks.pop(t)
-        conf = [k for k in g["tracks"] if k["status"] == "confirmed"]
-        tx = np.array([k["x"] for k in conf], dtype=float).reshape(-1, 6)
-        tP = np.array([k["P"] for k in conf], dtype=float).reshape(-1, 6, 6)
-        ids = np.array([k["id"] for k in conf], dtype=np.int64)
-        if ev.metrics.times and t <= ev.metrics.times[-1]:
+    def score(step: tuple[float, dict[str, Any], dict[str, Any]] | None) -> None:
+        if step is None:
             return
+        t, m, g = step
+        ids, tx, tP = confirmed_tracks(g)
         ev.add(t, m["id"], truth_state(m), ids, tx, tP)
         svc.last_t = t
         k = len(ev.metrics.times)
         if k % args.every == 0:
             r = ev.metrics.gospa_series[-1]
-            print(f"t={t:8.1f} truths={len(m['id'])} confirmed={len(conf)} GOSPA={r.distance:8.1f} "
+            print(f"t={t:8.1f} truths={len(m['id'])} confirmed={len(ids)} GOSPA={r.distance:8.1f} "
                   f"OSPA={ev.metrics.ospa_series[-1]:8.1f}", flush=True)
 
     def on_truth(key: str, payload: bytes) -> None:
         m = protocol.decode("truth_radar", payload)
-        truth[m["t"]] = m
         state["last"] = time.monotonic()
-        if m["t"] in tracks:
-            score(m["t"])
+        score(pairing.truth(m["t"], m))
 
     def on_gtracks(key: str, payload: bytes) -> None:
         g = protocol.decode("gtracks", payload)
-        tracks[g["t"]] = g
         state["last"] = time.monotonic()
-        if g["t"] in truth:
-            score(g["t"])
+        score(pairing.tracks(g["t"], g))
 
     def on_status(key: str, payload: bytes) -> None:
         state["done"] = protocol.decode("sim_status", payload)["state"] == "done"
@@ -122,5 +117,10 @@ def main(args: argparse.Namespace) -> int:
     svc.subscribe("sim/status", on_status)
     threading.Thread(target=watchdog, daemon=True).start()
     code = svc.run()
+    if not ev.metrics.times:
+        print("no step scored: no radar/gtracks and sim/truth/radar of one time arrived "
+              f"(rejected: {dict(svc.rejected) or 'none'}); is the deployment running and the "
+              "simulator publishing its truth?", flush=True)
+        return code or 1
     print(report(ev, cfg, args.settle), flush=True)
     return code

@@ -83,3 +83,19 @@ def test_evaluate_table_matches_direct_computation(tmp_path: Path) -> None:
     # the RMSE printed is the RMSE of the position errors, checked from the raw pairs
     for tid, rows_t in ev.after(SETTLE).items():
         assert scores[tid].rmse == np.sqrt(np.mean(rows_t[:, 3]))
+
+
+def test_evaluate_with_no_scored_step_says_so_and_fails(tmp_path: Path) -> None:
+    """Truth but no global tracks (no fusion running): no step can be scored, and the
+    table of zeros ("mean GOSPA 0.0 m, switches 0") is not printed as if it were a result."""
+    scn = SCENARIOS / "two_targets.toml"
+    out_path = tmp_path / "evaluate.out"
+    with Deployment(tmp_path) as d, open(out_path, "wb") as out:
+        ev_proc = Child("evaluate", "evaluate", "--config", str(scn), "--connect", d.endpoint,
+                        log=tmp_path / "evaluate.log", stdout=out)
+        d.children.append(ev_proc)
+        d.wait_alive(["evaluate/main"])
+        d.simulate(scn, seed=1, scans=5, wait_alive=["evaluate/main"])
+        assert ev_proc.wait(60.0) == 1
+    text = out_path.read_text()
+    assert "no step scored" in text and "mean GOSPA" not in text
