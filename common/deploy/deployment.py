@@ -89,6 +89,15 @@ def loopback_port(endpoint: str) -> int | None:
     return int(port)
 
 
+USAGE_EXIT = 2  # a command's code for a configuration or usage error (common.cli)
+
+
+def restartable(code: int) -> bool:
+    """Whether ``pfusion run`` restarts a child that exited with ``code``: not after a
+    configuration or usage error (USAGE_EXIT), which would only fail again."""
+    return code != USAGE_EXIT
+
+
 @dataclass
 class Backoff:
     """Restart delays: ``first`` doubling up to ``cap``; a child that ran for at least

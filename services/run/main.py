@@ -35,6 +35,7 @@ from common.deploy.deployment import (
     ChildSpec,
     loopback_port,
     plan,
+    restartable,
     router_endpoint,
     simulator_spec,
 )
@@ -119,6 +120,10 @@ class Supervised:
         ran = now - self.started_at
         if not self.restart:
             self.log.line("run", f"{self.spec.name} exited with code {self.returncode}")
+            return
+        if not restartable(self.returncode):
+            self.log.line("run", f"{self.spec.name} exited with code {self.returncode} (a configuration "
+                                 "or usage error: see its log lines above); not restarted")
             return
         delay = self.backoff.next_delay(ran)
         self.restart_at = now + delay

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import re
 import signal
+import time
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,7 @@ from common.bus.procs import pfusion_argv
 from common.bus.transport import free_port, open_session, wait_port
 from common.cli import COMMANDS
 from common.deploy.config import ConfigError, ZenohConfig, load, parse
-from common.deploy.deployment import Backoff, loopback_port, plan, router_endpoint, simulator_spec
+from common.deploy.deployment import Backoff, loopback_port, plan, restartable, router_endpoint, simulator_spec
 from tests.harness import Terminal
 
 REPO = Path(__file__).resolve().parents[2]
@@ -188,3 +189,28 @@ def test_run_restarts_a_killed_service_and_its_output_resumes() -> None:
     new_pid = run.pids("elementary-tracker/b1")[1]
     assert new_pid != pid and gone(new_pid)
     assert "[run] stopped" in run.lines
+
+
+def test_restartable_only_without_a_usage_error() -> None:
+    assert restartable(1) and restartable(-9) and restartable(0)
+    assert not restartable(2)
+
+
+def test_run_does_not_restart_a_child_that_exits_with_a_configuration_error(tmp_path: Path) -> None:
+    """Global fusion refuses range-Doppler bases (exit 2): run says so once and leaves it,
+    instead of restarting it for ever; the other services keep running."""
+    text = Path(TWO_TARGETS).read_text().replace("p = 1\n", "p = 1\nazimuth = false\n")
+    cfg = tmp_path / "range_doppler.toml"
+    cfg.write_text(text)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    run = Run("--config", str(cfg), "--connect", endpoint, "--with-router")
+    try:
+        run.wait_for("global fusion's exit", lambda: any("global-fusion exited with code 2" in line
+                                                         for line in run.lines))
+        time.sleep(3.0)  # six first back-off delays (0.5 s): a restart would have started
+        assert len(run.pids("global-fusion")) == 1, run.log()
+        assert any(re.match(r"\[run\] global-fusion exited with code 2 \(a configuration or usage "
+                            r"error.*not restarted", line) for line in run.lines), run.log()
+        assert all(len(run.pids(f"elementary-tracker/{b}")) == 1 for b in ("b1", "b2", "b3"))
+    finally:
+        assert run.stop() == 0, run.log()
