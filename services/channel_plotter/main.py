@@ -34,7 +34,12 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_base", f"base '{msg['base']}' on a plotter of '{base.id}'")
         if msg["channel"] != key.rsplit("/", 1)[-1]:
             raise Rejected("channel_mismatch", f"channel '{msg['channel']}' published on {key}")
-        scans = core.push(msg["channel"], msg["t"], plots_of(msg, base.azimuth))
+        try:
+            scans = core.push(msg["channel"], msg["t"], plots_of(msg, base.azimuth))
+        finally:
+            for channel, t in core.take_evicted():
+                svc.reject("ahead", f"channel {channel}: plots of t={t} dropped, more than max_ahead "
+                                    "ahead of the base's other channels", key)
         for t, fused in scans:
             svc.last_t = t
             svc.publish(f"radar/fused/{base.id}", fused_message(base.id, t, fused))

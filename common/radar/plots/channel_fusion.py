@@ -41,11 +41,15 @@ class PlotterParams(Params):
     """Parameters of table [radar.plotter].
 
     n_sigma: half-width of the aggregation intervals in sigmas (2, as in 001 [5]).
+    max_ahead: a plot stamped more than this ahead of the latest time of its base's other
+        channels (or, without one, of its own channel's previous plots) is rejected
+        (`ahead`): one far-future stamp must not hold the base's scans back (s).
     """
 
     n_sigma: float = 2.0
+    max_ahead: float = 60.0
 
-    RANGES: ClassVar[dict[str, Range]] = {"n_sigma": positive("sigma")}
+    RANGES: ClassVar[dict[str, Range]] = {"n_sigma": positive("sigma"), "max_ahead": positive("s")}
 
 
 @dataclass
@@ -240,6 +244,9 @@ class PlotFusion:
         self.params = params or PlotterParams()
         self.azimuth = azimuth
         self._last = {c: -np.inf for c in self.channels}
+        self._unanchored: set[str] = set()  # last time taken with no reference to test it
+        self.evicted: list[tuple[str, float]] = []  # (channel, t) dropped as `ahead` later
+        self._ahead: dict[str, float] = {}  # each channel's last time rejected as `ahead`
         self._emitted = -np.inf
         self._newest = -np.inf
         self._pending: dict[float, dict[str, Plots]] = {}
@@ -254,15 +261,19 @@ class PlotFusion:
         if plots.azimuth != self.azimuth:
             raise Rejected("azimuth_mismatch", f"channel {channel}: plots with azimuth = "
                            f"{plots.azimuth} at a base with azimuth = {self.azimuth}")
+        self._check_ahead(channel, t)
         if t <= self._last[channel]:
             raise Rejected("time_backwards", f"channel {channel}: t={t} after t={self._last[channel]}")
         if t <= self._emitted:
             raise Rejected("late_scan", f"channel {channel}: scan t={t} already published")
+        self._anchor(channel, t)
         self._last[channel] = t
-        self._newest = max(self._newest, t)
         self._pending.setdefault(t, {})[channel] = plots
+        held = {self._last[c] for c in self._unanchored}  # untested times wait for a reference
+        self._newest = max([self._emitted] + [v for c, v in self._last.items() if c not in self._unanchored])
         n = len(self.channels)
-        done = [s for s in sorted(self._pending) if s < self._newest or len(self._pending[s]) == n]
+        done = [s for s in sorted(self._pending)
+                if s not in held and (s < self._newest or len(self._pending[s]) == n)]
         out = []
         for s in done:
             got = self._pending.pop(s)
@@ -271,3 +282,53 @@ class PlotFusion:
                                      self.azimuth)))
             self._emitted = s
         return out
+
+    def take_evicted(self) -> list[tuple[str, float]]:
+        """The (channel, t) evicted as `ahead` since the last call (for the counters)."""
+        out, self.evicted = self.evicted, []
+        return out
+
+    def _check_ahead(self, channel: str, t: float) -> None:
+        """The `max_ahead` rule: reference = the latest time of the other channels whose
+        time was itself tested, else this channel's previous time; a plot past it by more
+        than max_ahead is rejected, unless a majority of the base's channels (two plots of a
+        one-channel base) were rejected within max_ahead of it: the base's clock jumped, and
+        the jump is taken. A time taken with no reference (a base's first plots) that a
+        tested time later shows to lie more than max_ahead ahead is evicted: its pending
+        scan entry is dropped and recorded in `evicted`, its channel starts afresh."""
+        lim, n = self.params.max_ahead, len(self.channels)
+        others = [v for c, v in self._last.items() if c != channel and v > -np.inf and c not in self._unanchored]
+        own = self._last[channel]
+        ref = max(others) if others else (own if own > -np.inf and channel not in self._unanchored else None)
+        if ref is not None and t > ref + lim:
+            agree = [c for c, a in self._ahead.items() if abs(a - t) <= lim and (c != channel or n == 1)]
+            self._ahead[channel] = t
+            if not agree or len(agree) + 1 <= n / 2:
+                raise Rejected("ahead", f"channel {channel}: t={t} more than {lim} s ahead of t={ref}")
+            self._ahead.clear()  # a majority agrees: the base's clock jumped
+        for c in sorted(self._unanchored):
+            if self._last[c] > t + lim:
+                self._evict(c)
+
+    def _anchor(self, channel: str, t: float) -> None:
+        """Mark the channels whose times are now tested against another: this one when a
+        reference existed or another channel lies within max_ahead, and those channels."""
+        lim = self.params.max_ahead
+        near = [c for c, v in self._last.items() if c != channel and abs(v - t) <= lim]
+        own = self._last[channel]
+        tested = any(c not in self._unanchored for c in near) or (
+            own > -np.inf and (channel not in self._unanchored or t - own <= lim))
+        if tested or near:
+            self._unanchored.difference_update([channel, *near])
+        else:
+            self._unanchored.add(channel)
+
+    def _evict(self, channel: str) -> None:
+        t = self._last[channel]
+        scan = self._pending.get(t, {})
+        scan.pop(channel, None)
+        if not scan:
+            self._pending.pop(t, None)
+        self.evicted.append((channel, t))
+        self._last[channel] = -np.inf
+        self._unanchored.discard(channel)
