@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from collections import Counter
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -29,15 +30,28 @@ def alive(session: zenoh.Session, root: str) -> list[tuple[str, str]]:
     return sorted(found)
 
 
+FORGED: Counter[str] = Counter()  # metrics keys whose payload named another service
+
+
 def reports(inbox: Inbox) -> Iterator[tuple[tuple[str, str], dict[str, Any]]]:
-    """The metrics waiting in ``inbox``, as ((service, instance), counters); an invalid
-    one is logged and skipped."""
+    """The metrics waiting in ``inbox``, as ((service, instance), counters). The identity
+    is the key's (``<root>/metrics/<service>/<instance>``, which the ACL grants to that
+    service alone), never the payload's: a payload that names another service is
+    ignored, logged and counted in FORGED; an invalid one is logged and skipped."""
     while (env := inbox.get(0.0)) is not None:
+        *_, service, instance = env.key.split("/")
         try:
             m = protocol.unpack(env.payload)
-            yield (str(m["service"]), str(m["instance"])), m
-        except (protocol.DecodeError, KeyError) as e:
+            named = (str(m["service"]), str(m["instance"]))
+        except (protocol.DecodeError, KeyError, TypeError) as e:
             log.error("invalid metrics on %s: %s", env.key, e)
+            continue
+        if named != (service, instance):
+            FORGED[env.key] += 1
+            log.error("metrics on %s name %s/%s: ignored (%d so far on this key)", env.key,
+                      *named, FORGED[env.key])
+            continue
+        yield (service, instance), m
 
 
 def take(inbox: Inbox, metrics: dict[tuple[str, str], dict[str, Any]]) -> None:

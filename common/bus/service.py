@@ -33,6 +33,7 @@ from common.bus.transport import (
     stopped_early,
 )
 from common.core.rejection import Rejected
+from common.core.sequence import StampJump
 from common.deploy.config import Config
 from common.wire import protocol
 
@@ -140,7 +141,9 @@ class Service:
         self.counters["in"] += 1
         try:
             self.losses.check(env.key, env.attachment)
-        except ValueError as e:  # the sample itself is still handled
+        except StampJump as e:  # the sample itself is still handled
+            self.reject("stamp_jump", str(e), env.key)
+        except ValueError as e:
             self.reject("attachment", str(e), env.key)
         for route, handler in self._routes:
             if route.intersects(ke):

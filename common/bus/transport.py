@@ -323,12 +323,14 @@ class Inbox:
     def __init__(self) -> None:
         self._q: queue.Queue[Envelope] = queue.Queue()
 
+    def put(self, env: Envelope) -> None:
+        self._q.put(env)
+
     def on_sample(self, sample: zenoh.Sample) -> None:
-        self._q.put(Envelope(str(sample.key_expr), sample.payload.to_bytes(),
-                             attachment=attachment_of(sample)))
+        self.put(Envelope(str(sample.key_expr), sample.payload.to_bytes(), attachment=attachment_of(sample)))
 
     def on_query(self, query: zenoh.Query) -> None:
-        self._q.put(Envelope(str(query.key_expr), b"", query))
+        self.put(Envelope(str(query.key_expr), b"", query))
 
     def get(self, timeout: float) -> Envelope | None:
         try:

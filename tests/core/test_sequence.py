@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from common.bus.transport import read_stamp, stamp
-from common.core.sequence import SequenceCheck
+from common.core.sequence import SequenceCheck, StampJump
 
 
 @given(st.text(max_size=40), st.integers(min_value=0, max_value=2**63 - 1))
@@ -64,3 +64,13 @@ def test_restart_repeat_and_keys() -> None:
     assert check.observe("k", "s1", 9) == 0
     assert check.observe("k", "s2", 0) == 0  # a restarted publisher is a new source
     assert check.observe("other", "s1", 3) == 0  # sequences are per key
+
+
+def test_a_stamp_jump_is_no_loss_and_does_not_hide_later_losses() -> None:
+    seq = SequenceCheck(max_jump=10_000)
+    assert seq.observe("k", "s", 0) == 0
+    with pytest.raises(StampJump):
+        seq.observe("k", "s", 10**12)
+    assert seq.observe("k", "s", 1) == 0
+    assert seq.observe("k", "s", 10_002) == 10_000  # a gap of exactly max_jump is a loss
+    assert seq.observe("k", "s", 10_004) == 1

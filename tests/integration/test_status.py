@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from common.bus.liveliness import Drain
+from common.bus.liveliness import FORGED, Drain, take
 from common.bus.procs import pfusion_argv
+from common.bus.transport import Envelope, Inbox, stamp
 from common.deploy.config import ZenohConfig
 from common.wire import protocol
 from services.status.main import table
@@ -122,3 +123,46 @@ def test_drain_needs_two_quiet_reports_from_every_expected_service(tmp_path: Pat
             assert not settled()  # fusion has not reported since the mark
         finally:
             drain.close()
+
+
+def test_metrics_take_the_identity_of_their_key() -> None:
+    """The payload on channel_plotter/b1's key that names global_fusion/main is ignored and
+    counted; the true one is kept under the key's name."""
+    inbox = Inbox()
+    forged = {"service": "global_fusion", "instance": "main", "in": 999999}
+    true = {"service": "channel_plotter", "instance": "b1", "in": 4}
+    for m in (forged, true):
+        inbox.put(Envelope(f"{ROOT}/metrics/channel_plotter/b1", protocol.encode(m)))
+    before = FORGED[f"{ROOT}/metrics/channel_plotter/b1"]
+    metrics: dict[tuple[str, str], dict[str, object]] = {}
+    take(inbox, metrics)
+    assert list(metrics) == [("channel_plotter", "b1")] and metrics[("channel_plotter", "b1")]["in"] == 4
+    assert FORGED[f"{ROOT}/metrics/channel_plotter/b1"] == before + 1
+
+
+def test_status_takes_identity_from_the_key_and_stamp_jumps_are_not_losses(tmp_path: Path) -> None:
+    """A sample on the plotter's own metrics key that names global fusion is ignored (the
+    key, which the ACL protects, names the service); two junk plots with forged stamps
+    10^12 apart count as stamp_jump, not as 10^12 missed samples, and a real gap after
+    them is still counted."""
+    with Deployment(tmp_path) as d:
+        d.start("plotter", "channel-plotter", "--config", str(TWO_TARGETS), "--base", "b1")
+        d.wait_alive(["channel_plotter/b1"])
+        forged = {"v": protocol.VERSION, "service": "global_fusion", "instance": "main", "in": 999999,
+                  "out": 0, "rejected": {"invented": 1}, "missed": {}, "p50_ms": 0.0, "p99_ms": 0.0,
+                  "queue": 0, "t": 0.0}
+        key = f"{ROOT}/radar/plots/b1/c1"
+        for n in (0, 10**12, 1, 3):  # 10^12: a jump; 3 after 1: one sample really missed
+            d.session.put(key, b"\xc1 junk", attachment=stamp("forger", n))
+        deadline = time.monotonic() + 20
+        while True:
+            d.session.put(f"{ROOT}/metrics/channel_plotter/b1", protocol.encode(forged))
+            rows = status(d.endpoint)
+            plotter = rows.get(("channel_plotter", "b1"))
+            if plotter and plotter[0] == "4" or time.monotonic() > deadline:
+                break
+            time.sleep(0.3)
+    assert ("global_fusion", "main") not in rows
+    assert plotter is not None and plotter[0] == "4", plotter
+    assert plotter[3] == "1"  # missed: the one real gap (2), not 10^12
+    assert "stamp_jump=1," in plotter[8:] or "stamp_jump=1" in plotter[8:], plotter
