@@ -76,7 +76,9 @@ def _secure(c: zenoh.Config, zc: ZenohConfig, mode: str, connects: bool) -> None
                                "enable_mtls": t.mtls}
         present = t.mtls and (connects or not router)
         if router or present:
-            cert, key = (_existing(path, f"zenoh.tls.{name}") for path, name in mine)
+            (cert_path, cert_name), (key_path, key_name) = mine
+            cert = _existing(cert_path, f"zenoh.tls.{cert_name}")
+            key = _secret(key_path, f"zenoh.tls.{key_name}")
             if router:
                 tls |= {"listen_certificate": cert, "listen_private_key": key}
             if present:
@@ -85,7 +87,7 @@ def _secure(c: zenoh.Config, zc: ZenohConfig, mode: str, connects: bool) -> None
     if zc.auth is not None:
         usrpwd: dict[str, str] = {}
         if router:
-            usrpwd["dictionary_file"] = _existing(zc.auth.dictionary, "zenoh.auth.dictionary")
+            usrpwd["dictionary_file"] = _secret(zc.auth.dictionary, "zenoh.auth.dictionary")
         if zc.identity:
             usrpwd |= {"user": zc.identity, "password": password(zc.auth.credentials, zc.identity)}
         elif not router or connects:
@@ -102,10 +104,20 @@ def _existing(path: str, key: str) -> str:
     return path
 
 
+def _secret(path: str, key: str) -> str:
+    """A private key, password or dictionary file that only its owner may read: one that
+    group or others can read or write is refused (docs/security.md, attacker model (b))."""
+    mode = Path(_existing(path, key)).stat().st_mode & 0o777
+    if mode & 0o077:
+        raise ConfigError(key, f"{path} may be read or written by group or others (mode {mode:o}): "
+                               f"chmod 600 {path}")
+    return path
+
+
 def password(credentials: str, identity: str) -> str:
     """The password of ``identity`` in a ``user:password`` file (Zenoh's dictionary
     format)."""
-    for line in Path(_existing(credentials, "zenoh.auth.credentials")).read_text().splitlines():
+    for line in Path(_secret(credentials, "zenoh.auth.credentials")).read_text().splitlines():
         user, sep, pw = line.strip().partition(":")
         if sep and user == identity:
             return pw

@@ -187,10 +187,32 @@ def test_pfusion_acl_prints_what_the_router_applies(tmp_path: Path,
     assert json.loads(out) == {"access_control": access_control(load(tmp_path / "d.toml"))}
 
 
+def test_secret_files_readable_by_others_are_refused_with_exit_2(tmp_path: Path) -> None:
+    """Attacker model (b): a credentials, dictionary or private-key file that group or
+    others may read is refused (ConfigError naming the key: exit 2, which run does not
+    restart); the same file with mode 600 is accepted."""
+    users = tmp_path / "users"
+    users.write_text("global-fusion:pw\n")
+    (tmp_path / "d.toml").write_text(MIXED + '[zenoh.auth]\ncredentials = "users"\n')
+    zc = dataclasses.replace(load(tmp_path / "d.toml").zenoh, identity="global-fusion")
+    for mode in (0o644, 0o640, 0o604):
+        users.chmod(mode)
+        with pytest.raises(ConfigError) as e:
+            transport.zenoh_config(zc.connect, [], "client", security=zc)
+        assert e.value.key == "zenoh.auth.credentials" and "chmod 600" in str(e.value)
+    out = subprocess.run(pfusion_argv("global-fusion", "--config", str(tmp_path / "d.toml"),
+                                      "--identity", "global-fusion"),
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "zenoh.auth.credentials" in out.stderr, out.stderr
+    users.chmod(0o600)
+    transport.zenoh_config(zc.connect, [], "client", security=zc)
+
+
 def test_router_needs_mutual_tls_to_apply_access_control_upstream(tmp_path: Path) -> None:
     """A site router knows its upstream router only by its certificate: without mutual
     TLS its deny-by-default rules would drop everything from upstream, so it refuses."""
     (tmp_path / "users").write_text("router-north:pw\n")
+    (tmp_path / "users").chmod(0o600)
     (tmp_path / "d.toml").write_text(MIXED + '[zenoh.auth]\ncredentials = "users"\n'
                                              'dictionary = "users"\n')
     args = argparse.Namespace(listen=["tcp/127.0.0.1:1"], connect=["tcp/127.0.0.1:2"],
@@ -229,8 +251,9 @@ def deployment_files(d: Path) -> tuple[Path, Path]:
     site.write_text(text + SECURITY.format(router="router-rx1"))
     names = [*grants(load(fusion)), *(router_identity(s) for s in ("rx1", "rx2"))]
     lines = [f"{n}:{secrets.token_hex(12)}" for n in names]
-    (d / "dictionary.txt").write_text("\n".join(lines) + "\n")
-    (d / "credentials.txt").write_text("\n".join(lines) + "\n")
+    for name in ("dictionary.txt", "credentials.txt"):
+        (d / name).write_text("\n".join(lines) + "\n")
+        (d / name).chmod(0o600)  # group- or world-readable secrets are refused
     return fusion, site
 
 
@@ -270,6 +293,7 @@ def test_wrong_or_missing_credentials_and_foreign_ca_cannot_connect(
     monkeypatch.setattr(transport, "CONNECT_TIMEOUT_S", ATTEMPT_S)
     wrong = secure.dir / "wrong.txt"
     wrong.write_text("operator:not-the-password\n")
+    wrong.chmod(0o600)
     tls = good.tls
     assert tls is not None and good.auth is not None
     bad = {
