@@ -215,7 +215,7 @@ def run(name: str, seed: int, scans: int | None, fusion: dict[str, Any] | None =
                 t2 = time.process_time()
                 cost["tracker"] += t2 - t1
                 etracks.append((bidx[base], tracks))
-                cycles += chain.fusion.push(base, tracks)
+                cycles += chain.fusion.push(base, tracks, tf)  # message time as wall time
                 out += [gtracks_message(g) for g in cycles[len(out):]]
                 t1 = time.process_time()
                 cost["fusion"] += t1 - t2

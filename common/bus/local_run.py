@@ -151,10 +151,11 @@ class Deployment:
 
     def simulate(self, scenario: Path, seed: int = 1, scans: int | None = None,
                  wait_alive: list[str] = (), timeout: float = 300.0, repeat: int = 1,
-                 gap: float = 0.0) -> Child:
+                 gap: float = 0.0, speed: float = 0.0) -> Child:
         """Run the simulator to completion (waiting for ``wait_alive`` services first);
         `repeat` runs with seeds seed, seed + 1, ... separated by `gap` target-free
-        seconds (``pfusion simulate --repeat --gap``)."""
+        seconds (``pfusion simulate --repeat --gap``); `speed` times real time (0: as
+        fast as possible)."""
         if not self.collector.announced:
             self.announce()
         args = ["simulate", "--config", str(scenario), "--scenario", str(scenario),
@@ -165,6 +166,8 @@ class Deployment:
             args += ["--scans", str(scans)]
         if repeat > 1:
             args += ["--repeat", str(repeat), "--gap", str(gap)]
+        if speed > 0:
+            args += ["--speed", repr(speed)]
         sim = self.start("simulate", *args)
         deadline = time.monotonic() + timeout
         while sim.alive():

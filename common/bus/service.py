@@ -100,8 +100,9 @@ class Service:
     def stop(self, *_: Any) -> None:
         self._stop.set()
 
-    def run(self) -> int:
-        """Drain the inbox until SIGINT/SIGTERM; returns the process exit code."""
+    def run(self, at_end: Callable[[], None] | None = None) -> int:
+        """Drain the inbox until SIGINT/SIGTERM, then call `at_end` (it may still
+        publish; its errors are counted as a handler's); returns the exit code."""
         signal.signal(signal.SIGINT, self.stop)
         signal.signal(signal.SIGTERM, self.stop)
         if stopped_early():
@@ -122,6 +123,8 @@ class Service:
                 if time.monotonic() >= next_metrics:
                     self.publish(f"metrics/{self.name}/{self.instance}", self.metrics())
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
+            if at_end is not None:
+                self._guard("(end of input)", at_end)
         finally:
             signals.close()
             token.undeclare()

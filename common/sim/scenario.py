@@ -14,7 +14,7 @@ with [radar.origin]) a radar target's z is its WGS-84 ellipsoidal height and its
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -63,9 +63,16 @@ class RadarSim:
     snr_sigma_db: float = 1.0
     snr_ref_range: float = 50e3
     clutter_snr_db: float = 2.0
+    timing: dict[str, tuple[float, float]] = field(default_factory=dict)  # base: period, phase
 
     def channel(self, cid: str) -> RadarChannelSim:
         return self.channels.get(cid, self.default)
+
+    def base_times(self, base: str, duration: float) -> np.ndarray:
+        """Scan times of a base: phase + k period in [0, duration) ([sim.radar.base.<id>]),
+        else the common k scan_period."""
+        period, phase = self.timing.get(base, (self.scan_period, 0.0))
+        return phase + np.arange(int(np.ceil((duration - phase) / period - 1e-9))) * period
 
 
 @dataclass(frozen=True)
@@ -259,7 +266,7 @@ def _unique_ids(movers: list[Mover], key: str) -> None:
 def _radar(t: Any, period: float) -> RadarSim:
     key = "sim.radar"
     win = {"rb_max", "vb_max", "snr_threshold_db", "snr_sigma_db", "snr_ref_range",
-           "clutter_snr_db", "channel", "target"}
+           "clutter_snr_db", "channel", "target", "base"}
     t = _table(t, key, _RCH_KEYS | win)
     default = _radar_channel(t, key, RadarChannelSim())
     chans_raw = _table(t.get("channel", {}), f"{key}.channel", set(t.get("channel", {})))
@@ -272,8 +279,16 @@ def _radar(t: Any, period: float) -> RadarSim:
         for i, m in enumerate(_list(t, "target", key))
     ]
     _unique_ids(targets, f"{key}.target")
+    timing = {}
+    for b, v in _table(t.get("base", {}), f"{key}.base", set(t.get("base", {}))).items():
+        k = f"{key}.base.{b}"
+        v = _table(v, k, {"period", "phase"})
+        bp = _num(v, "period", k, period, 0.0, lo_open=True)
+        timing[b] = (bp, _num(v, "phase", k, 0.0, 0.0, bp))
+        if timing[b][1] == bp:
+            raise ConfigError(f"{k}.phase", f"must be below the period {bp}")
     return RadarSim(
-        default, chans, targets, period,
+        default, chans, targets, period, timing=timing,
         rb_max=_num(t, "rb_max", key, 200e3, 0.0, lo_open=True),
         vb_max=_num(t, "vb_max", key, 600.0, 0.0, lo_open=True),
         snr_threshold_db=_num(t, "snr_threshold_db", key, 10.0),

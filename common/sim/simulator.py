@@ -5,7 +5,9 @@ Pure: no Zenoh, no clocks, no printing. :func:`scans` yields, for each scan time
 scenario time (the sorted union of the radar and sonar scan times in [0, duration)),
 the list of scans produced at t:
 
-- :class:`RadarTruth`, then a :class:`RadarScan` per base and channel, at radar scan times;
+- :class:`RadarTruth`, then a :class:`RadarScan` per channel of every base scanning at t,
+  at radar scan times (a base's own period and phase under [sim.radar.base.<id>], else
+  the common scan_period; truth at the union of the bases' times);
 - per array a :class:`SonarTruth` and a :class:`SonarScan`, at sonar scan times.
 
 In a geodetic deployment (scn.origin set) a radar target's mover runs in the tangent
@@ -134,7 +136,11 @@ def scans(
     radar, sonar = scn.radar, scn.sonar
     if radar is not None:
         _check_ids(set(radar.channels), {c for b in bases for c in b.channels}, "sim.radar.channel")
-        tr = scan_times(scn.duration, radar.scan_period)
+        _check_ids(set(radar.timing), {b.id for b in bases}, "sim.radar.base")
+        own_t = {b.id: np.round(radar.base_times(b.id, scn.duration), 9) for b in bases}
+        tr = (np.unique(np.concatenate(list(own_t.values()))) if radar.timing
+              else scan_times(scn.duration, radar.scan_period))
+        scanning = {b: set(v.tolist()) for b, v in own_t.items()}
         rp, rv, ra, rid = _truth(radar.targets, tr)
         if scn.origin is not None:  # [x, y, ellipsoidal height] -> ENU (docstring)
             rp, rv = scn.origin.lift_motion(rp, rv)
@@ -164,7 +170,7 @@ def scans(
                 on = ra[:, k]
                 p, v = rp[on, k], rv[on, k]
                 out.append(RadarTruth(t, rid[on], p, v))
-                for b in bases:
+                for b in (b for b in bases if t in scanning[b.id]):
                     for c in b.channels:
                         key = f"radar/plots/{b.id}/{c}"
                         out.append(RadarScan(t, b.id, c, radar_plots(p, v, b, radar.channel(c), radar, rng(key))))

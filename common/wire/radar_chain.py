@@ -1,11 +1,13 @@
-"""The radar chain of 001 (modules 31-34, 41-44, 61-65) in one process, on message dicts.
+"""The radar chain of 001 (modules 31-34, 41-44, 61-65), or of a network (global fusion
+by common.radar.network, picked by common.radar.fusion_core), in one process, on message
+dicts.
 
 The services `channel-plotter`, `elementary-tracker` and `global-fusion` are thin
 shells around the same cores and build their messages with common.wire.radar_messages, so a
 chain run here gives what the processes publish for the same input (given the same
 per-scan grouping; tests/integration/test_global_integration.py compares the two). Used for Monte Carlo
 studies (many seeds in seconds), benchmarks and the consistency tests of the global
-covariance. No I/O, no clock: global fusion's arrival rule (common.radar.fusion.arrival)
+covariance. No I/O, no clock: 001's arrival rule (common.radar.fusion.arrival)
 takes each report's message time as its wall time, a real-time run without latency. Every
 base reports every scan, so with scans shorter than `max_wait` no base goes stale and no
 report is rejected: the rule changes nothing here.
@@ -20,26 +22,26 @@ from common.core.crossing import CrossingParams
 from common.deploy.config import Config, section
 from common.radar.elementary.model import model_of
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion.arrival import Arrival
-from common.radar.fusion.cycle import GlobalFusion
 from common.radar.fusion.params import FusionParams
+from common.radar.fusion_core import FusionCore, fusion_core
 from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
 from common.wire.radar_messages import gtracks_message, plots_of
 
 
-def global_fusion(cfg: Config) -> GlobalFusion:
-    """The global fusion core of a deployment: [radar.fusion], [radar.fusion_crossing]
-    (the sup-norm test of 004 when absent) and [radar.tracker] (for the decorrelation).
-    Raises ValueError if the bases cannot be fused (fewer than 2, several receivers, a
-    base without azimuth)."""
+def global_fusion(cfg: Config) -> FusionCore:
+    """The global fusion core of a deployment (common.radar.fusion_core.fusion_core):
+    [radar.fusion], [radar.fusion_crossing] (the sup-norm test of 004 when absent) and
+    [radar.tracker] (for the decorrelation). Raises ValueError if the bases cannot be
+    fused."""
     crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
-    return GlobalFusion(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
-                        section(cfg, "radar.tracker", ElementaryParams))
+    return fusion_core(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
+                       section(cfg, "radar.tracker", ElementaryParams))
 
 
 class RadarChain:
-    """One channel plotter and one elementary tracker per base, and global fusion."""
+    """One channel plotter and one elementary tracker per base, and global fusion;
+    `flush` at the end of input."""
 
     def __init__(self, cfg: Config) -> None:
         plotter = section(cfg, "radar.plotter", PlotterParams)
@@ -51,7 +53,6 @@ class RadarChain:
                          for b in cfg.bases}
         self.fusion = global_fusion(cfg)
         self.origin = cfg.origin
-        self.arrival = Arrival(self.fusion)
 
     def step(self, messages: Iterable[tuple[str, dict[str, Any]]]) -> list[dict[str, Any]]:
         """Feed one scan's simulator messages (key suffix, message); `radar/plots/...`
@@ -64,5 +65,9 @@ class RadarChain:
             plots = plots_of(msg, self.azimuth[base])
             for t, fused in self.plotters[base].push(msg["channel"], msg["t"], plots):
                 tracks = self.trackers[base].step(t, fused)
-                out += [gtracks_message(g, self.origin) for g in self.arrival.push(base, tracks, t)]
+                out += [gtracks_message(g, self.origin) for g in self.fusion.push(base, tracks, t)]
         return out
+
+    def flush(self) -> list[dict[str, Any]]:
+        """End of input: the gtracks messages of what global fusion still buffers."""
+        return [gtracks_message(g, self.origin) for g in self.fusion.flush()]

@@ -19,6 +19,7 @@ from common.radar.fusion.cycle import GlobalFusion
 from common.radar.fusion.initiation import Candidates, InitParams
 from common.radar.fusion.params import FusionParams
 from common.radar.fusion.track_filter import BandFixes
+from common.radar.fusion_core import SingleReceiver
 from common.radar.geometry.bistatic import POS, project
 from common.radar.geometry.localisation import Constraints, block_localise, gauss_newton
 from common.radar.plots.channel_fusion import Plots
@@ -176,7 +177,7 @@ def test_seed_path_tracks_two_targets() -> None:
     doc.setdefault("radar", {}).setdefault("fusion", {})["filter"] = "seed"
     cfg = parse(doc, path)
     chain = RadarChain(cfg)
-    assert chain.fusion.table.mu.shape[1] == 1
+    assert isinstance(chain.fusion, SingleReceiver) and chain.fusion.fusion.table.mu.shape[1] == 1
     ev = Evaluation()
     numbers = set()
     for _, msgs in run_scenario(load_scenario(doc), cfg.bases, cfg.arrays, 1):

@@ -47,7 +47,8 @@ from common.radar.network.tracks import Tracks
 @dataclass(frozen=True)
 class NetworkReport:
     """Live global tracks at t: id, status (Status codes), x (N, 6), P (N, 6, 6),
-    n_bases (N,) members."""
+    n_bases (N,) members; member (N, B) the elementary track number of each configured
+    base, has (N, B) whether that base has a member."""
 
     t: float
     id: np.ndarray
@@ -55,6 +56,8 @@ class NetworkReport:
     x: np.ndarray
     P: np.ndarray
     n_bases: np.ndarray
+    member: np.ndarray
+    has: np.ndarray
 
 
 def anchor_triples(receiver: np.ndarray) -> list[tuple[int, int, int]]:
@@ -213,5 +216,9 @@ class NetworkFusion:
             if np.isfinite(self.next_report) else t + self.p.report_period
         T = self.tracks
         x, P = T.predicted(t)
-        return [NetworkReport(t, T.id.copy(), T.status.copy(), x, P, T.n_bases())]
+        member = np.full((len(T), len(self.ids)), -1, dtype=np.int64)
+        for r, m in enumerate(T.members):
+            member[r, list(m)] = list(m.values())
+        return [NetworkReport(t, T.id.copy(), T.status.copy(), x, P, T.n_bases(), member,
+                              member >= 0)]
 
