@@ -244,11 +244,9 @@ class Publisher:
     count a missed sample (``common.core.sequence``; format in docs/protocol.md).
 
     It has no ``undeclare``: closing the session delivers every queued sample, whereas
-    undeclaring a publisher right after a burst loses its samples still in flight
-    (measured here: 4 publishers x 4000 samples of 7 kB through a router lost 250-550
-    per key when undeclared before ``close()``, none when not; a liveliness round trip
-    before the undeclare did not help, so it does not order with data). Close after
-    :func:`linger`."""
+    undeclaring a publisher right after a burst loses its samples still in flight, and a
+    liveliness round trip before the undeclare does not order with data
+    (docs/decisions/015-publisher-no-undeclare.md). Close after :func:`linger`."""
 
     def __init__(self, session: zenoh.Session, key: str) -> None:
         self._pub = session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK,

@@ -23,6 +23,7 @@ import numpy as np
 from common.core.params import ParamError
 from common.deploy.errors import ConfigError
 from common.deploy.positions import geo_origin, site_position
+from common.deploy.structure import ARRAY, BASE
 from common.radar.geometry.geodesy import LocalFrame
 
 # A Zenoh key chunk: non-empty, none of / * $ ? #, not verbatim (@...); we also refuse
@@ -274,7 +275,7 @@ def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
     for i, e in enumerate(entries):
         key = f"site[{i}]"
         _check_table(e, key)
-        unknown = set(e) - {"id", "bases", "arrays"}
+        unknown = set(e) - {f.name for f in dataclasses.fields(Site)}
         if unknown:
             raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
         lists = {}
@@ -296,7 +297,7 @@ def _sites(entries: Any, bases: list[str], arrays: list[str]) -> list[Site]:
 def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
     key = f"radar.base[{i}]"
     _check_table(b, key)
-    unknown = set(b) - {"id", "tx", "rx", "tx_geo", "rx_geo", "channels", "p", "azimuth"}
+    unknown = set(b) - BASE.names()
     if unknown:
         raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
     for k in ("id", "channels"):
@@ -322,7 +323,7 @@ def _radar_base(b: Any, i: int, origin: LocalFrame | None) -> RadarBase:
 def _sonar_array(a: Any, i: int) -> SonarArray:
     key = f"sonar.array[{i}]"
     _check_table(a, key)
-    unknown = set(a) - {"id", "kind", "sigma0"}
+    unknown = set(a) - ARRAY.names()
     if unknown:
         raise ConfigError(f"{key}.{sorted(unknown)[0]}", "unknown key")
     kind = a.get("kind", "cylindrical")

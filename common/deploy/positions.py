@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from common.deploy.errors import ConfigError
+from common.deploy.structure import ORIGIN
 from common.radar.geometry.geodesy import LocalFrame
 
 
@@ -25,7 +26,7 @@ def point(v: Any, key: str, geo: bool = False) -> np.ndarray:
 
 def geo_origin(o: Any) -> LocalFrame | None:
     """Table [radar.origin] (lat, lon deg, alt m ellipsoidal) as a frame; None: flat."""
-    if o is not None and (not isinstance(o, dict) or set(o) != {"lat", "lon", "alt"}):
+    if o is not None and (not isinstance(o, dict) or set(o) != ORIGIN.names()):
         raise ConfigError("radar.origin", "must be a table of exactly lat, lon (deg), alt (m, ellipsoidal)")
     return None if o is None else LocalFrame(*point([o["lat"], o["lon"], o["alt"]], "radar.origin", True).tolist())
 

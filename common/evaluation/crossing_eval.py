@@ -7,12 +7,8 @@ Distances are Euclidean on components divided by `EvalParams.sigma`, angle compo
 wrapped to [-pi, pi).
 
 Association (per cycle): truths and confirmed tracks one to one, the assignment of least
-total distance over the pairs within `gate` (`one_to_one`). Until 2026-11-26 (session 13)
-each truth took its nearest confirmed track and several truths could share one: a
-resolved truth whose own track was not yet confirmed was scored on its neighbour's
-track and, once its own confirmed, counted a swap although no number had changed target
-(the MHT's sonar_cross_4dpm_eq seed 267: its one swap run; numbers before and after in
-benchmarks/crossing_seeds.py).
+total distance over the pairs within `gate` (`one_to_one`), never one track for two
+truths (why, and the nearest-track rule it replaced: docs/decisions/001-crossing-scoring.md).
 Swap: at a cycle where the truth is resolved (every other truth farther than
 `resolved`), its associated track number differs from the one of its previous resolved
 cycle while that previous track is still live. Cycles where the truths are closer
@@ -20,10 +16,8 @@ than `resolved` are skipped: there the nearest track is decided by noise, not by
 tracker. A number change after the previous track was deleted is not a swap (a break).
 "Still live" is the track, not its number (`Numbers`): the single-hypothesis tracker
 reuses the number of a deleted track at once, often in the same cycle, for a new
-tentative track. Until 2026-11-26 (session 17) a number reused so counted as live, and
-a lost track replaced by a new number was scored a swap (GNN: 5 of the 7 swap runs of
-benchmarks/crossing_seeds.py's sonar_cross_* scenes over seeds 1-480 with that session's
-tracker; numbers there).
+tentative track; a number reused so is not the live track, and a lost track replaced
+by a new number is a break, not a swap (docs/decisions/001-crossing-scoring.md).
 Lost: after its first association, the truth has no confirmed track within `gate` for
 more than `lost_cycles` consecutive cycles.
 Flag: over the cycles where a truth is associated, the fraction whose track is flagged

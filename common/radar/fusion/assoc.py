@@ -142,8 +142,7 @@ def gated_component_pairs(
     gate, left the track and started a duplicate with a fourth base; (2) the onset of a
     turn, which only the manoeuvre model's prediction covers while the quiet model
     still dominates the weights: all four bases failed the gate within two scans and a
-    new track took over. On dense.toml, seeds 1-4: number switches 64 -> 11, breaks
-    45 -> 23; two_targets and crossing ANEES and RMSE/PCRLB unchanged."""
+    new track took over (figures: docs/decisions/016-global-association.md)."""
     K = w.shape[1]
     rows = (tracks[:, None] * K + np.arange(K)).ravel()[(w[tracks] > 0).ravel()]
     i, m, g = gated_pairs(xc.reshape(-1, 6), Pc.reshape(-1, 6, 6), rows, ets, E, tx, rx,
@@ -216,14 +215,10 @@ def ambiguous_members(w: np.ndarray, xc: np.ndarray, Pc: np.ndarray, x: np.ndarr
     elementary track once, but two aircraft close in one base's measurement space keep
     passing [48] against each other's track, and a young track (velocity and altitude
     still loose) then takes the other's measurements whenever that base's elementary
-    tracks swap. Measured on dense1000.toml (seed 1): two aircraft 540 m apart in plan
-    and 1.7 km in altitude, base b2's elementary tracks swapped at t = 5 s; both tracks
-    took them, their altitude bands collapsed 0.6-1.1 km off (sigma_z 190-340 m, the
-    other three bases barely observe altitude) and the tracks flip-flopped between the
-    two truths for 25 s. As 004 does for a crossing, an ambiguous measurement is not
-    used (dense1000: NEES 6.0 -> 3.4, number switches 7.1 -> 4.7 per 100 targets).
-    Without the likelihood condition every crossing of two settled tracks of
-    crossing.toml was withheld too (RMSE/PCRLB 0.79 -> 0.87 over seeds 1-3).
+    tracks swap (both tracks then take them and flip-flop between the two aircraft). As
+    004 does for a crossing, an ambiguous measurement is not used; the likelihood
+    condition keeps the crossings of two settled tracks in use (the case and figures:
+    docs/decisions/016-global-association.md).
     Candidates: held elementary tracks whose ranges differ by less than sqrt(gamma_max)
     (2 sigma_i + sigma_m + 2 sigma_j + sigma_m'), sigma_i the range sigma of track i's
     projected moments, and azimuths by less than 2 az_gate (the prefilter of

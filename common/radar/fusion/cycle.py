@@ -13,8 +13,9 @@ streams interleave, as long as no base is declared stale.
 
 Deviation (stated): 001's rule "every base reported t, or any base reported a later
 time" assumes bases in lock step with real time; faster than real time (replay) the
-per-base processes drift apart by tens of scans (29 measured on crossing.toml): a
-message-time rule ran cycles without a merely slow base and depended on process timing.
+per-base processes drift apart by tens of scans
+(docs/decisions/010-global-fusion-wall-time.md): a message-time rule ran cycles
+without a merely slow base and depended on process timing.
 
 Cycle at t (001 figure 7):
   predict every component of every global track to t ([55]-[56], IMM mixing);

@@ -260,8 +260,8 @@ def altitude_bands(
     Why: for a low target the two ellipsoids meet along a curved arc and the likelihood
     of the scans is Gaussian in (z - z_rx)^2, flat-bottomed in z; a single Gaussian in z
     settles against the steep side of that likelihood and claims an altitude it does
-    not have, whatever the linearisation (crossing.toml's 1.5 km target: z 1-4 km off
-    with NEES 20-60 for a quarter of the seeds). Band a has the altitude prior
+    not have, whatever the linearisation (docs/decisions/011-global-track-filter.md).
+    Band a has the altitude prior
     N(z_a, s_a^2), z_a = z_min + low ratio^a, s_a = (ratio - 1) z_a / 2: a constant
     ratio of spread to altitude, as the range-parametrised filters of bearings-only
     tracking (Peach 1995), since the likelihood is curved in z^2 and a band is
@@ -274,8 +274,8 @@ def altitude_bands(
     band); the scans' equivalent measurements weigh the bands from the next cycle on
     (common.radar.fusion.mixture). The evidence of the two elementary estimates is not used:
     just after confirmation their covariance is not reliable enough to weigh altitudes
-    (measured: with it, a 3.4 sigma azimuth error of one elementary track took the
-    true band out at the first cycle, crossing.toml seed 16, NEES 19). evidence=True (a
+    (one elementary track's azimuth error can take the true band out at the first
+    cycle: docs/decisions/011-global-track-filter.md). evidence=True (a
     track rebuilt from mature elementary tracks, common.radar.fusion.reopen): weights
     by the Laplace evidence of each band, log w_a = -J_a / 2 + log det(C_a) / 2 - log s_a
     (J_a: the least-squares cost of the ranges, azimuths and altitude prior at the band's

@@ -6,9 +6,8 @@ Why: module 62 starts a track from any pair of free elementary tracks of two bas
 a target's elementary tracks are free in two disjoint pairs of bases at once (e.g. {b1,
 b2} and {b3, b4}), or after a track lost some bases, two tracks follow one target, each
 updated by half of its bases. Module 63 cannot repair it, since an elementary track
-belongs to one global track. Measured on dense300.toml (300 targets, 4 bases, 120 s):
-such pairs made 3 of the 6 number switches (the two tracks took turns as the one
-nearest the target) and a false track for as long as they lasted.
+belongs to one global track. Such pairs make number switches (the two tracks take turns
+as the one nearest the target) and a false track for as long as they last.
 
 Test: d^2 = (p_i - p_j)' (P_i + P_j)^-1 (p_i - p_j) <= gamma on the 3-D positions (the
 two estimates use disjoint data, so their errors are independent and P_i + P_j is the
@@ -21,49 +20,38 @@ Tracks that share a base are never merged (two targets, each seen by every base,
 come as close as they like). A track without contributors (coasting) pairs too: when
 every base loses a target at once (near the receiver, where the azimuth rate common to
 all bases is high), its new elementary tracks can start a new track before the
-coasting one gates them (dense1000.toml seed 2, aircraft 380: a new track in the scan of
-the loss, the coasting prediction within 20 m of the aircraft). The track with
-contributors is then the kept one (its state rests on data; keeping an older coasting
-track's state instead lost a well-held aircraft's four elementary tracks on
-dense1000.toml seed 3), and takes the coasting track's number by `number_kept`.
+coasting one gates them. The track with contributors is then the kept one (its state
+rests on data), and takes the coasting track's number by `number_kept`.
 
 Second test, in the bases' measurement space (`explained`): the Cartesian test misses
-the duplicates whose altitude is wrong with a small sigma_z. Measured on dense1000.toml
-(seed 1; the elementary tracks labelled with the truth): of the 919 tracks born at
-t = 2-5 s, 57 came from a pair of two targets' elementary tracks at one azimuth and 17
-from a pair extended with another target's track; module 62 locates such a pair at the
-ellipsoids' fictitious intersection, often 10-20 km up, the first located scans shrink
-every altitude band there (sigma_z 50-250 m), and once the other target's elementary
-track fails [48] and leaves, the track keeps the first target's bases at that
-altitude while the target's own track holds its other bases (in 858 false-track scans
-of t = 30-60 s, 88 % had the target next to them in plan held by another track). The
-weak altitude geometry of one receiver (a 3 km altitude error gives gamma 3-8 of [48]
-only, tests/radar/test_global_ghosts.py's geometry) lets such a track go on passing
-[48] with its own elementary tracks. The test: every elementary track of one track
-passes [48] against a live component of the other's mixture, and not the reverse; the
-track that explains the other keeps its state (and number, but for `number_kept`) and
-takes its elementary tracks. A track still holding both targets' elementary tracks,
-each explained by another track, is deleted: 001 module 61 removes "aberrant" global
-tracks without saying how they are found. A confirmed track located this cycle (module
-64's joint test of its elementary tracks passed, which a pair of two targets' elementary
-tracks fails: the confirmation rule of common.radar.fusion.cycle) is not dissolved: on
-dense1000.toml seed 1 (benchmarks/origin_switches.py) 6 of the 8 confirmed tracks
-dissolved held one aircraft's elementary tracks only, each explained by a neighbour whose
-altitude sigma of ~1 km let it pass [48] at the bases it lacked, and their aircraft took
-a new number a few scans later.
+the duplicates whose altitude is wrong with a small sigma_z. Module 62 can start a track
+from a pair of two targets' elementary tracks at one azimuth and locates it at the
+ellipsoids' fictitious intersection, often 10-20 km up; the first located scans shrink
+every altitude band there, and once the other target's elementary track fails [48] and
+leaves, the track keeps the first target's bases at that altitude while the target's
+own track holds its other bases. The weak altitude geometry of one receiver lets such a
+track go on passing [48] with its own elementary tracks. The test: every elementary
+track of one track passes [48] against a live component of the other's mixture, and
+not the reverse; the track that explains the other keeps its state (and number, but
+for `number_kept`) and takes its elementary tracks. A track still holding both targets'
+elementary tracks, each explained by another track, is deleted: 001 module 61 removes
+"aberrant" global tracks without saying how they are found. A confirmed track located
+this cycle (module 64's joint test of its elementary tracks passed, which a pair of two
+targets' elementary tracks fails: the confirmation rule of common.radar.fusion.cycle)
+is not dissolved.
 
 Numbers (`number_kept`): when only the dropped track of a merged pair is confirmed, the
 kept track (its state, elementary tracks and confirmation) takes the dropped track's
-number and birth time. Measured on dense1000.toml (seed 1, 120 s, the elementary tracks
-labelled with the truth): 8 of the 77 number switches were a confirmed track, assigned
-to a target, explained by a tentative track just started from that target's free
-elementary tracks (6 of the 28 merges of `explained`): the target changed number when
-its new track was confirmed. The kept track stays tentative until confirmed (moving the
-confirmation too made false tracks and NEES worse). A kept track confirmed in this very
-cycle counts as not confirmed here (since session 16): its number was never published
-as confirmed, so the dropped track's published number goes on (a coasting confirmed
-track merged, in the cycle that confirms it, with the track of its aircraft's new
-elementary tracks).
+number and birth time, so that a target does not change number when the track just
+started from its free elementary tracks is confirmed. The kept track stays tentative
+until confirmed (moving the confirmation too made false tracks and NEES worse). A kept
+track confirmed in this very cycle counts as not confirmed here: its number was never
+published as confirmed, so the dropped track's published number goes on (a coasting
+confirmed track merged, in the cycle that confirms it, with the track of its
+aircraft's new elementary tracks).
+
+Measured figures behind each rule, and the commands that give them:
+docs/decisions/002-duplicate-track-merge.md.
 """
 
 from __future__ import annotations

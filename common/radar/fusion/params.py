@@ -34,8 +34,7 @@ class FusionParams(InitParams):
         confirm_bases is capped at all the deployment's bases but one, and at least 2
         (three of four; two of two or three): two bases give a curve, on which the
         elementary tracks of two neighbouring aircraft locate as well as one's (stated;
-        dense1000, 4 bases, 2 -> 3: number switches per 100 targets, seeds 1-14, mean
-        0.44 -> 0.35, missed +0.0-0.2 % of the targets). A tentative track that loses a
+        figures: docs/decisions/013-dense-scenes.md). A tentative track that loses a
         member (dissociated by [48] or module 64's v_b test) counts again from zero: its
         cycles so far were located with an elementary track of another aircraft (stated;
         dense1000: tracks confirmed 5 km off in altitude on a wrong combination).
@@ -46,8 +45,8 @@ class FusionParams(InitParams):
         a base stale (common.radar.fusion.arrival, the arrival rule).
     max_lead: seconds of message time after the latest cycle beyond which global fusion
         rejects a message and declares its base stale (a clock jumped forward; above
-        the lag between bases of a fast replay, common.radar.fusion.cycle: 29 scans
-        measured).
+        the lag between bases of a fast replay, common.radar.fusion.cycle and
+        docs/decisions/010-global-fusion-wall-time.md).
     init_confirmed_only: module 62 uses confirmed, updated elementary tracks only.
     eq_gate_prob: chi-square(3) probability of the consistency test of an equivalent
         measurement against the elementary track's prediction (common.radar.fusion.decorrelation).

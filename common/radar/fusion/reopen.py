@@ -9,9 +9,7 @@ kilometre apart in plan at different altitudes, one base's tracks exchanged) set
 a compromise altitude with a small variance. When the foreign elementary track is
 finally dropped, the remaining ones pull the altitude back slowly while the variance,
 built on the wrong combination, stays small; the track's own elementary track of that
-base then fails [48] against it and is never admitted (measured, dense1000 seed 7:
-aircraft 931 tracked at 2.0-3.9 km, truth 5.0 km, sigma_z 200-360 m, for 60 s, and its
-neighbour 336 at 6.3 km, truth 3.9 km; per-target mean NEES 21 000 and 49 000).
+base then fails [48] against it and is never admitted.
 
 Here a confirmed track that lost a member this cycle (dissociated by module 63, or by
 module 64's v_b test the cycle before) and holds at least MIN_SOUND sound members
@@ -23,48 +21,30 @@ young ones). The track takes that mixture (its number, status and memberships st
 (1) the mixture resolves the altitude: its sigma_z below band_linear times the height
 above the receiver, the linear regime of common.radar.fusion.mixture (three bases of
 poor vertical geometry, or two aircraft's elementary tracks, give a flat evidence: a
-rebuild from it loses the track; measured, dense1000 seed 2: a track rebuilt with
-sigma_z 1.8 km lost its members and left a ghost at 20 km holding a neighbour's
-elementary tracks, mean NEES 3.67 -> 5.40), and (2) the track's predicted position lies
+rebuild from it loses the track), and (2) the track's predicted position lies
 outside every band of weight >= 1e-3 at gate_prob (chi-square, 3 dof, on the position
 with both covariances). When the bands leave the altitude open (condition 1 fails),
 the track keeps its mean but its altitude and vertical-velocity variances are floored at
 the mixture's (`floor_vertical`): the information of a lost member may have been a
 foreign aircraft's, and the EKF's altitude information from bistatic ranges grows with
 the height it is linearised at, so a track started high on a wrong combination credits
-itself several times the information its own members give (measured, dense1000 seed 7:
-aircraft 915 tracked at 3.2-4.0 km, truth 5.8 km, sigma_z 170-260 m, after dropping the
-foreign elementary track of base b1, its bases b0, b2 and b3 giving a flat evidence;
-seed 2: aircraft 671 at 7.2 km, truth 1.3 km, descending through the truth and below
-ground on a vertical velocity of -70 m/s that the dropped members had given it; per-target
-mean NEES 2186 and 617). Floored, a track can admit its own elementary track of the lost
-base again: in seed 7, 840's track (3.5 km, truth 2.4 km) was floored at t = 14 s and
-took its own b1 track at t = 17 s (2.5 km from then on); 915's rose to 4.6-5.0 km and
-took its own at t = 70 s. Seeds 1-14: 150-215 floors per run, mean NEES 2.9-3.7 (seed 7
-5.19 -> 3.15, seed 2 3.65 -> 3.04), no switch count higher (docs/radar_at_scale.md,
-session 14). Otherwise nothing changes: a member lost to a manoeuvre, a
-crossing or a track's end, with the others agreeing, costs no information. The rebuilt
-track is not updated in that cycle (as a new track is not): its members' estimates
-already hold the scan. Measured (benchmarks/dense_scale.py, dense1000 seeds 1-10): 0-9
-rebuilds per run; seed 7's mean NEES 81.9 -> 6.7 (per-step pairing; both aircraft above), the other
-seeds' NEES, missed and false tracks unchanged within 0.1; switches per 100 targets
-+0.1 on seed 1, +0.2 on seed 7, -0.1 on seeds 8 and 9 (docs/radar_at_scale.md).
+itself several times the information its own members give. Floored, a track can admit
+its own elementary track of the lost base again. Otherwise nothing changes: a member
+lost to a manoeuvre, a crossing or a track's end, with the others agreeing, costs no
+information. The rebuilt track is not updated in that cycle (as a new track is not):
+its members' estimates already hold the scan.
 
-The watch (`FusionParams.reopen_watch`, since session 16): the rebuild's test runs every
-cycle on the other confirmed tracks too, those that lost no member, without the floor
+The watch (`FusionParams.reopen_watch`): the rebuild's test runs every cycle on the
+other confirmed tracks too, those that lost no member, without the floor
 (`floor=False`: an open evidence says nothing against a track that lost nothing). A
 track can be fed by its own elementary tracks only and still sit at a wrong altitude
 with a small sigma_z, once the members it lost while its start mixed two aircraft's
-elementary tracks are gone and nothing triggers the test (measured, dense1000 seed 34:
-aircraft 931 and 336, 1.2 km apart in plan on one course at 5.0 and 3.9 km; 931's track
-#580, tentative from t = 3 to 25 s while both aircraft's elementary tracks came and
-went, held its four own from t = 30 s, 1.7 km low with sigma_z 196 m, 336's #897 1.8 km
-high; the scoring paired each aircraft with the other's track, 336's per-target
-NEES 12636 and the run's mean NEES 15.62). With the watch, seed 34's mean NEES is
-3.05, with 16 rebuilds in the run (23 on seed 9). The "resolved" condition keeps the
-false rebuilds few: most tracks' members leave the altitude open at any one scan. Cost:
-global fusion 115 -> 155-162 ms per scan in process at 1000 targets
-(benchmarks/dense_scale.py; seeds 1-40 in docs/radar_at_scale.md, session 16).
+elementary tracks are gone and nothing triggers the test. The "resolved" condition
+keeps the false rebuilds few: most tracks' members leave the altitude open at any one
+scan.
+
+The cases that led to each rule, the figures with and without it, and the commands
+that give them: docs/decisions/003-altitude-rebuild.md.
 """
 
 from __future__ import annotations

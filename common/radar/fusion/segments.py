@@ -8,10 +8,9 @@ IMM and initialization with Doppler for improved track performance", IEEE TAES 4
 every base loses the aircraft at once (a turn's onset: the elementary trackers' one
 motion model [19]-[20] gates the plots out; a pass near the receiver, whose azimuth is
 common to all bases), new elementary tracks start a new global track, confirmed under a
-new number while the old one still coasts (measured, dense1000 seed 9: aircraft 905,
-a 1.6 g turn from t = 53 s; at t = 61 its new track was 460 m from the old one's
-straight prediction, d^2 = 508 on the two covariances, 6 dof; 3.5 with the envelope
-below).
+new number while the old one still coasts, often far outside a gate on the two
+covariances alone (a turn is not in the straight prediction), inside it with the
+envelope below.
 
 Test, for an old segment o (confirmed, no member, coasting for tau seconds since its
 last update) and a new one n (confirmed this cycle, born after o's last update):
@@ -29,12 +28,8 @@ segments of one aircraft do not overlap in time; overlapping tracks are
 common.radar.fusion.merge's duplicates). The new track then takes o's number and birth
 time, and o's coasting state is dropped (common.radar.fusion.succession).
 
-Measured (benchmarks/dense_scale.py, dense1000 seeds 1-14, accel 10 m/s^2, about 1 g,
-with the numbering rule of common.radar.fusion.merge for a track confirmed in the cycle
-of its merge): 5 continuations in 14 runs, four of them aircraft 905's turn (seeds 1,
-5, 6, 9) and one in seed 8 (t = 86 s); number switches per 100 targets 0.1 lower on
-seeds 1, 5, 6, 8 and 9 (seed 9 1.00 -> 0.90), none higher, every other column
-unchanged (docs/radar_at_scale.md, session 16).
+The case behind the rule, the continuations and switches with and without it, and the
+command that gives them: docs/decisions/004-track-segment-association.md.
 """
 
 from __future__ import annotations

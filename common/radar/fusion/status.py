@@ -8,14 +8,11 @@ left) for `coast_cycles` consecutive cycles is reported coasting too; it is conf
 again at the next cycle with an updated contributor.
 
 Why: an elementary track coasts up to 5 scans ([radar.tracker] max_coast) after its
-target left, and the global track was reported confirmed all that time. Measured on
-dense1000.toml (seed 2, 120 s, after 30 s; the elementary tracks labelled with the
-nearest truth projected into their base): 382 of the 988 false track-scans (3.9 of 11.0
-per scan) were such tracks of departed aircraft, every contributor in prediction. One
-cycle (coast_cycles 1) also reports the present targets that every base missed in
-one scan ((1 - Pd)^k for k bases: 2 % at Pd 0.85, k = 2): breaks 3.8 -> 4.3 per 100
-targets and missed 11.8 -> 11.9 per scan there; two consecutive cycles ((1 - Pd)^2k)
-leave both unchanged within 0.1.
+target left, and the global track was reported confirmed all that time: a large share
+of the false track-scans of a dense scene. One cycle (coast_cycles 1) would also report
+the present targets that every base missed in one scan ((1 - Pd)^k for k bases: 2 % at
+Pd 0.85, k = 2); two consecutive cycles ((1 - Pd)^2k) make that rare. Figures and the
+command: docs/decisions/005-coasting-status.md.
 """
 
 from __future__ import annotations

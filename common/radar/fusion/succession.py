@@ -5,9 +5,7 @@ module 61, stated).
 confirmed global track is removed (deleted, or dissolved by common.radar.fusion.merge)
 while its aircraft's elementary tracks live on, a new global track is started from them
 (module 62) and confirmed under a new number a few cycles later: the aircraft is
-renumbered although every base kept following it. Measured on dense1000.toml (seed 5):
-aircraft 94 and 102 renumbered that way at t = 59-64 and 89-95, the new track holding
-two and three of the old track's elementary tracks.
+renumbered although every base kept following it.
 
 Rule: the number of a removed confirmed track that still holds elementary tracks is held
 for `keep` cycles (its slot is not given to new tracks); a track confirmed in that time
@@ -18,25 +16,22 @@ Elementary tracks belong to one aircraft by construction, and two of them from t
 are what module 62 needs to start a track, so two shared are the evidence of one aircraft.
 
 Members dissociated by module 63 ([48]) count as held in two cases (`dissociated`):
-a confirmed track removed in the cycle it lost them (dissolved by common.radar.
-global_merge: measured, dense1000 seed 9, aircraft 468's track #762 lost b0 and b3 to
-[48] at t = 74 s and was dissolved holding b1 and b2, b2's elementary track ending; the
-track started from the lost b0 and b3 tracks was confirmed at t = 78 s under a new
-number), and a confirmed track they leave without members (an orphan: 001 keeps it in
+a confirmed track removed in the cycle it lost them (dissolved by
+common.radar.fusion.merge, its lost members then starting the aircraft's new track),
+and a confirmed track they leave without members (an orphan: 001 keeps it in
 pure prediction until deletion, while its free elementary tracks start a new track at
 once; the new track confirmed on at least `min_shared` of them takes the orphan's slot,
 number and birth time, the orphan's predicted state being dropped for the heir's, and a
-deleted orphan's number is held as a removed track's). dense1000 seeds 9 / 11: switches
-per 100 targets 1.50 / 1.20 -> 1.20 / 1.10 (the orphan rule alone: 1.50 / 1.10; gone:
-the switches of aircraft 468, 373 and 375 in seed 9, 379 in seed 11).
+deleted orphan's number is held as a removed track's).
 
-Only new numbers are replaced (since session 16; common.radar.fusion.cycle passes the
-tracks confirmed this cycle whose number was never published as confirmed): a track
-confirmed again under a number it already published keeps it. Measured, dense1000 seed
-16, aircraft 905: its track #530, merged at t = 59 with the track of its new elementary
-tracks (common.radar.fusion.merge.number_kept: the kept track goes on, tentative, under
-530), was confirmed again at t = 63 and took the held number of a removed track that had
-held two of those elementary tracks, a switch 530 -> 664.
+Only new numbers are replaced (common.radar.fusion.cycle passes the tracks confirmed
+this cycle whose number was never published as confirmed): a track confirmed again
+under a number it already published keeps it (a track kept by
+common.radar.fusion.merge.number_kept, tentative, and confirmed again must not take a
+held number).
+
+The cases behind each rule and the switches with and without it:
+docs/decisions/006-number-succession.md.
 """
 
 from __future__ import annotations

@@ -3,9 +3,8 @@
 
 State (complement of 001 [44]-[46], stated): every track is a Gaussian sum over
 altitude bands x motion models (common.radar.fusion.mixture; common.radar.fusion.initiation.
-altitude_bands says why a low target needs it: crossing.toml's 1.5 km target had a
-mean NEES of 9.4 over 16 seeds with one Gaussian, 2.9 with the bands). x and P of a
-track are the moments of its mixture.
+altitude_bands says why a low target needs it; docs/decisions/011-global-track-filter.md
+has the figures). x and P of a track are the moments of its mixture.
 Motion model (complement of 001 [51], which uses one fixed Q): an interacting multiple
 model filter (common.core.imm) of two [51] CV models, "quiet" (q) and "manoeuvre"
 (q_manoeuvre), with mean sojourn times; the model-matched estimates are mixed before
@@ -13,9 +12,8 @@ the prediction [55]-[56], updated by [58]-[62] each, weighted by the likelihood 
 the scan's measurement [49]; a new track starts from the chain's stationary
 probabilities. Association (63), crossing (004) and output use the combined
 estimate. With one fixed Q the filter could not be both consistent on a straight
-target and follow a 2 deg/s turn (two_targets.toml: a Q sized for the turn gave a
-straight target's mean NEES 1.88; an adaptive q reacted after the gate [48] had
-dissociated the bases at the turn's onset, NEES bursts of 100-450).
+target and follow a 2 deg/s turn, and an adaptive q reacted after the gate [48] had
+dissociated the bases at the turn's onset (docs/decisions/011-global-track-filter.md).
 Decorrelation (complement of 001, common.radar.fusion.decorrelation): modules 64-65 do not take the
 elementary tracks' filtered estimates as measurements (their errors are correlated in
 time, which made the global covariance far too small), but the equivalent measurement
@@ -37,8 +35,7 @@ is small). When that base's elementary track swaps to a neighbour's target (an
 elementary crossing, or module 62 extending a new track with the neighbour's track of
 that base while the altitude is still open), the gate [48] of that track alone passes
 (the manoeuvre component covers the jump) and the EKF explains it by a false z and vz
-with a small covariance: on dense1000.toml, 1.3 % of the scored samples, a third of the
-sum of the position NEES (mean 6.0; docs/radar_at_scale.md). The other bases' v_b
+with a small covariance (how often: docs/decisions/011-global-track-filter.md). The other bases' v_b
 do check it: the row j of a contributor whose squared innovation against the
 prediction updated with every other row of [49] exceeds the chi-square(1) threshold of
 the largest of n rows at gate_prob is left out of modules 64-65 for the scan, the track

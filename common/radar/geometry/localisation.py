@@ -351,11 +351,11 @@ def linearised_position(
     Deviations from 001 (stated): 001 localises each scan by blocks [36]-[41] alone.
     For a low target, z is nearly unobservable in one scan (crossing.toml, 1.5 km at
     40 km: sigma_z ~ 3 km) and the block zone is cut at z >= z_min and curved, so its
-    mean [41] is biased (measured +0.8 to +2 km); the EKF averaged that bias into a
+    mean [41] is biased upwards by kilometres; the EKF averaged that bias into a
     confident, wrong altitude. A Jacobian at a point estimate (EKF/IEKF) claims the
     slope d r_b / d z of that point, which grows with the height above the sensors'
     plane: with an altitude estimated too high it overstates the z information
-    (measured: z 1.4 km off with sigma 0.33 km on crossing.toml). The regression over
+    (figures: docs/decisions/011-global-track-filter.md). The regression over
     the posterior uses the slope the data have over the altitudes still credible and
     adds Omega for the curvature it cannot follow, so the information is honest while
     the altitude is uncertain and tends to the Jacobian's once it is known.

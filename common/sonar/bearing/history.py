@@ -5,9 +5,8 @@ per cycle; served on sonar/history/<array>/<id> (docs/protocol.md).
 
 Deviation (issue 13): 000 registers the estimated bearings. Those are correlated from
 cycle to cycle, so a TMA that treats them as independent publishes an optimistic
-covariance (benchmarks/tma_hold.py, five-turn geometry, 20 runs: mean NEES 30 for 4
-degrees of freedom; 4.0 with the detections). The detections are independent with a
-known sigma. A cycle without a detection for the track adds no row; the detections of a
+covariance. The detections are independent with a known sigma (figures:
+docs/decisions/008-tma-on-detections.md). A cycle without a detection for the track adds no row; the detections of a
 track flagged by 004 crossing management are left out (they may be the other target's).
 """
 

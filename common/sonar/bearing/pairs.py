@@ -25,10 +25,8 @@ sonar_hold_cross_turn seed 67 the pair overshot by 3 deg, one track took the oth
 target's detection 7 deg off when both left the memory mode, and the two then coasted
 side by side beside one target for minutes, eq. 13 testing only their predictions. A
 young track's bearing-rate error did the same on the fast crossings (sonar_cross_4dpm_*).
-Measured (benchmarks/crossing_seeds.py, GNN with 004, the ten crossing scenes, 1600 runs
-each line, runs with a swap (with a break)): seeds 1-160 29 (17) -> 0 (3), seeds 161-320
-(held out) 16 (5) -> 0 (1), seeds 321-480 and 481-640 (never run before) 1 (3) and
-0 (4); bearing RMSE per scene 0.51-0.94 -> 0.39-0.75 deg.
+Swap and break runs, bearing RMSE with and without these rules, and the command:
+docs/decisions/007-sonar-memory-pairs.md.
 """
 
 from __future__ import annotations

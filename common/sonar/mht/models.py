@@ -12,14 +12,14 @@ merge runs within a track and a model), so the model branches are the MHT form o
 IMM's mixing (a generalised pseudo-Bayesian step, Bar-Shalom et al. 2001, 11.6.5). A
 straight contact keeps its main hypothesis in the quiet model and a light manoeuvre copy;
 at a manoeuvre the copy wins by its likelihood. With the manoeuvre Q alone the bearing
-rates of crossing tracks wandered (sigma about 1.8 deg/min) and the tracks coalesced
-(sonar_hold_cross_* 7 to 11 swap runs of 20); with the quiet Q alone no crossing swapped
-but every close passage (sonar_hold_cpa) broke.
+rates of crossing tracks wandered and the tracks coalesced; with the quiet Q alone no
+crossing swapped but every close passage (sonar_hold_cpa) broke
+(docs/decisions/012-mht-model-branches.md).
 Resolution conflicts (000 IN, common.sonar.mht.tracks): the hypotheses of a track in
 conflict continue in the quiet model only, as the single-hypothesis mode's IMM does in
 seed 004's memory mode (common.sonar.bearing.imm): the unresolved detections between the
 two targets look like a bearing-rate change to the manoeuvre model, which bent both
-tracks onto one target (sonar_hold5: 14 swap runs of 20 without this rule).
+tracks onto one target (sonar_hold5, docs/decisions/012-mht-model-branches.md).
 """
 
 from __future__ import annotations

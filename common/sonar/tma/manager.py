@@ -10,9 +10,8 @@ Bearings: the detections the bearing tracker associated with the track, with the
 sigmas and own-ship positions, from its bearing register (the history queryable,
 common.sonar.bearing.history), fetched when the track is new and whenever its TMA cycle
 is due. They are independent with a known sigma, so the TMA covariance P is the true
-one to first order (issue 13: mean NEES 4.0 for 4 degrees of freedom over 20 runs on
-benchmarks/tma_hold.py's five-turn geometry; the filtered bearings x[0] of btracks,
-used before, gave 30). btracks gives the confirmed tracks and the cycle times; ``sample_dt``
+one to first order, unlike the filtered bearings x[0] of btracks (issue 13; figures:
+docs/decisions/008-tma-on-detections.md). btracks gives the confirmed tracks and the cycle times; ``sample_dt``
 thins the bearings.
 
 Decimation: a track's TMA cycle (one ``TmaTracker.update`` with every bearing buffered
