@@ -67,7 +67,7 @@ def main() -> int:
     ok = True
     print(f"{'aircraft':>8} {'bases':>5} {'reports':>7} {'ms/report':>9} {'p99 ms':>7} "
           f"{'missed':>6} {'false':>5} {'switches':>8} {'rmse/crlb':>9} {'nees':>6}")
-    for n in (20, 100):
+    for n in (20, 100, 300):
         rng = np.random.default_rng(a.seed)
         bases = ns.network(rng)
         p0, v = ns.aircraft(rng, n)

@@ -24,7 +24,6 @@ time t (no common scan time):
 from __future__ import annotations
 
 import heapq
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -57,16 +56,9 @@ class NetworkReport:
     n_bases: np.ndarray
 
 
-def anchor_triples(receiver: np.ndarray) -> list[tuple[int, int, int]]:
-    """Base triples over 3 receivers (over 2 when the network has only 2)."""
-    need = min(3, np.unique(receiver).size)
-    return [c for c in itertools.combinations(range(receiver.size), 3)
-            if np.unique(receiver[list(c)]).size >= need]
-
-
 class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
-    `waiting` the gated triples deferred by max_triples."""
+    `waiting` the seed cells deferred by max_cells."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None
                  ) -> None:
@@ -75,8 +67,6 @@ class NetworkFusion:
         rx = np.array([b.rx for b in bases], dtype=float)
         _, rec = np.unique(np.round(rx, 3), axis=0, return_inverse=True)
         self.sites = Sites(np.array([b.tx for b in bases], dtype=float), rx, rec.ravel())
-        self.triples = anchor_triples(self.sites.receiver)
-        self.next_triple = 0
         self.dec = Decorrelator(self.p.sigma_gamma, self.p.sigma_omega, self.p.decor_gate)
         self.tracks = Tracks(self.p, self.sites.receiver)
         self.heap: list[tuple[float, int, int, ElementaryTracks]] = []
@@ -183,20 +173,13 @@ class NetworkFusion:
         return Leftovers(*(np.concatenate(c) for c in zip(*parts)))
 
     def _initiate(self, t: float) -> None:
-        """Step 6: the next anchor triple whose bases all have leftovers."""
+        """Step 6 (common.radar.network.initiation)."""
         left = self._leftovers(t)
         with_left = np.unique(left.base)
         if with_left.size < 3 or np.unique(self.sites.receiver[with_left]).size < 2:
             return
         required = max(3, min(self.p.init_bases, with_left.size))
-        for _ in range(len(self.triples)):
-            anchors = self.triples[self.next_triple]
-            self.next_triple = (self.next_triple + 1) % len(self.triples)
-            if np.isin(anchors, with_left).all():
-                break
-        else:
-            return
-        opened, waiting = initiate(left, self.sites, anchors, required, self.p)
+        opened, waiting = initiate(left, self.sites, required, self.p)
         self.waiting += waiting
         for c in range(opened.members.shape[0]):
             x, P = opened.fix.x[c], opened.fix.P[c]

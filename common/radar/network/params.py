@@ -23,10 +23,11 @@ class NetworkParams:
         report is not used for initiation.
     init_bases: bases needed to open a track (capped to the bases with leftovers, never
         below 3); init_prob: quantile of the residual chi-square tests of a candidate.
-    pair_sigmas: margin, in sigma_r, of the cheap pair gate; max_triples: triples
-        solved per round (the rest wait for the next round, counted).
-    z_min, z_max: m, altitude bounds of the surveillance volume; seed_xy: m, offset of
-        the horizontal seeds around the anchor receivers; seed_z: m, seed altitudes.
+    z_min, z_max: m, altitude bounds of the surveillance volume; volume_margin: m, its
+        horizontal extent beyond the sites' box.
+    cell_coarse, cell_fine: m, sides of the first and (at least) the last voting cells;
+        vote_slack: votes below the best cell's a cell may have and still be refined;
+        max_cells: cells refined per level (most voted first; the rest wait, counted).
     max_sigma: m, worst position sigma beyond which a fix is degenerate.
     cycle: s, confirmation cycle; confirm_cycles: cycles, each with updates from >= 3
         bases over >= 2 receivers, to confirm.
@@ -47,12 +48,13 @@ class NetworkParams:
     stale: float = 2.5
     init_bases: int = 6
     init_prob: float = 0.999
-    pair_sigmas: float = 5.0
-    max_triples: int = 20000
     z_min: float = 0.0
     z_max: float = 20e3
-    seed_xy: float = 40e3
-    seed_z: tuple[float, ...] = (3e3, 10e3)
+    volume_margin: float = 20e3
+    cell_coarse: float = 10e3
+    cell_fine: float = 300.0
+    vote_slack: int = 1
+    max_cells: int = 20000
     max_sigma: float = 10e3
     cycle: float = 1.0
     confirm_cycles: int = 3
