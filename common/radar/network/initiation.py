@@ -8,7 +8,9 @@ One round at time t, from the leftovers' [r_b, v_b] predicted to t:
    within k sigma_r plus the cell's range margin; cells with fewer than `required`
    bases are dropped (ghosts: an exactly determined triple is always consistent,
    over-determination is what tells them apart), identical member sets kept once;
-3. `localise` ([GN], [LS], [FIM]) on all members from the cell centre, a re-gate of
+3. `localise` ([GN], [LS], [FIM]) on all members from the cell centre and from its
+   (x, y) at each altitude of seed_z (least cost wins: the altitude valley of far
+   bases has local minima), a re-gate of
    every base on [r_b, v_b] with S = J P J' + R, `localise` again; a candidate is
    accepted when it still has `required` bases over >= 2 receivers, chi2 <= its
    chi-square(2n - 6) quantile AND chi2_v <= the chi-square(n - 3) quantile
@@ -144,7 +146,9 @@ def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams
     keep = (members >= 0).sum(axis=1) >= required
     members, first = np.unique(members[keep], axis=0, return_index=True)
     pts = pts[keep][first]
-    fix = _fix(left, sites, members, pts[:, None, :], p)
+    seeds = np.repeat(pts[:, None, :], 1 + len(p.seed_z), axis=1)
+    seeds[:, 1:, 2] = p.seed_z
+    fix = _fix(left, sites, members, seeds, p)
     members = _regate(fix, left, sites, p)
     fix = _fix(left, sites, members, fix.x[:, None, [0, 2, 4]], p)
     ok = _accepted(fix, members, sites, required, p)
