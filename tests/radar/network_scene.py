@@ -92,6 +92,15 @@ def line(n: int, span: float = 100e3, z: float = 8e3) -> tuple[np.ndarray, np.nd
     return p0, np.tile([0.0, 200.0, 0.0], (n, 1))
 
 
+def formation(rng: np.random.Generator, n: int, size: float = 2e3, z: float = 8e3
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """n aircraft within a size x size x size/4 box at z, one heading, 200 m/s +- 5 m/s
+    (ghost scene: tight formation)."""
+    p0 = rng.uniform(-size / 2, size / 2, (n, 3)) * [1, 1, 0.25] + [0.0, 0.0, z]
+    v = np.column_stack([np.zeros(n), rng.uniform(195, 205, n), np.zeros(n)])
+    return p0, v
+
+
 def simulate(rng: np.random.Generator, bases: list[Base], p0: np.ndarray, v: np.ndarray,
              duration: float, pd: float = 0.9, latency: float = 0.3) -> Scene:
     """Every base's reports over [0, duration), delivered in order of true time plus a

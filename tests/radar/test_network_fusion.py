@@ -11,6 +11,7 @@ network, confirmed false tracks < 1 % of the aircraft per report."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
@@ -68,12 +69,16 @@ def score(scene: ns.Scene, reports: list[NetworkReport]) -> Score:
                  float(np.concatenate(nees).mean()) if nees else np.nan)
 
 
+@functools.lru_cache(maxsize=None)
 def run(seed: int, kind: str = "random", clock: float = 0.0, duration: float = 45.0
         ) -> tuple[ns.Scene, list[NetworkReport], NetworkFusion]:
+    """The scene of `seed`; clock offsets uniform in +-clock from their own generator
+    (the same aircraft and noise as without)."""
     rng = np.random.default_rng(seed)
     bases = ns.network(rng)
     if clock:
-        bases = [dataclasses.replace(b, clock=float(rng.uniform(-clock, clock))) for b in bases]
+        off = np.random.default_rng(seed + 1000).uniform(-clock, clock, len(bases))
+        bases = [dataclasses.replace(b, clock=float(c)) for b, c in zip(bases, off)]
     p0, v = ns.aircraft(rng, 20) if kind == "random" else ns.line(24)
     scene = ns.simulate(rng, bases, p0, v, duration)
     fusion = NetworkFusion(bases)
@@ -103,14 +108,20 @@ def test_ghost_line(seed: int) -> None:
     assert s.missed == 0
 
 
-@pytest.mark.parametrize("seed", [1, 3])
+@pytest.mark.parametrize("seed", [1, 2, 3])
 def test_clock_offsets_up_to_0_2_s(seed: int) -> None:
-    """Node clocks off by up to 0.2 s, absorbed as R_rr += (v_b clock_sigma)^2: every
-    aircraft held, no false track. Not asserted: the RMSE goal (a constant offset is a
-    bias, not white noise; it pulls the weakly observed altitude, docs/networks.md)."""
-    scene, reports, _ = run(seed, clock=0.2)
+    """Node clocks off by up to 0.2 s, estimated per base (common.radar.network.clocks):
+    every aircraft held, no false track, the offsets of the DVB-T bases (30 m) found to
+    within 0.05 s up to their common part (unobservable). Not asserted: NEES and RMSE
+    against the run without offsets (not met, docs/networks.md)."""
+    scene, reports, fusion = run(seed, clock=0.2)
     s = score(scene, reports)
     assert (s.missed, s.duplicates, s.false) == (0, 0, 0)
+    off = np.array([b.clock for b in scene.bases])
+    est = fusion.clocks.c
+    err = (est - est.mean()) - (off - off.mean())
+    fine = np.array([b.sigma_r for b in scene.bases]) <= ns.DVBT[0]
+    assert np.abs(err[fine]).max() < 0.05, err
 
 
 def test_reordering_window() -> None:
@@ -141,3 +152,23 @@ def test_five_state_reports_accepted() -> None:
     assert fusion.dec.last[0][2].shape == (1, 5)
     with pytest.raises(Rejected):
         fusion.push(bases[0].id, 1.0, dataclasses.replace(rep, x=x[:, :4]))
+
+
+KNOWN_GHOSTS = pytest.mark.xfail(strict=True, reason="a false track at 5 % of the aircraft per "
+                                 "report (docs/networks.md, Limits): a fix makes this fail")
+
+
+@pytest.mark.parametrize("seed", [pytest.param(1, marks=KNOWN_GHOSTS), pytest.param(2, marks=KNOWN_GHOSTS), 3])
+def test_ghost_formation(seed: int) -> None:
+    """20 aircraft within 2 km between 4 receivers: confirmed false tracks (farther than
+    2 km from every aircraft) < 1 % of the aircraft per report."""
+    rng = np.random.default_rng(seed)
+    bases = ns.network(rng, n_rx=4, span=100e3)
+    p0, v = ns.formation(rng, 20)
+    scene = ns.simulate(rng, bases, p0, v, 45.0)
+    fusion = NetworkFusion(bases)
+    out: list[NetworkReport] = []
+    for b, t, rep in scene.reports:
+        out += fusion.push(bases[b].id, t, rep)
+    s = score(scene, out + fusion.flush())
+    assert s.false < 0.01 * 20 * s.scans

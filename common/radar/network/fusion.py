@@ -5,13 +5,15 @@ push(base, t, ElementaryTracks) buffers a report; reports leave the reordering w
 (`window` s behind the newest stamp) in time order and each runs one step at its own
 time t (no common scan time):
   1. equivalent measurements of the report (common.radar.fusion.decorrelation, 3-state
-     [r_b, v_b] or 5-state [r_b, v_b, theta] tracks); clock: R_rr += (v_b clock_sigma)^2,
-     the range error v_b dt of a stamp dt off;
+     [r_b, v_b] or 5-state [r_b, v_b, theta] tracks), shifted by the base's clock
+     offset estimate (common.radar.network.clocks [C3]);
   2. every global track predicted to t (CV, 001 [51]: cv_F, cv_Q);
   3. a member's measurement is gated (chi-square, S = H P~ H' + R, H the rows of 001
      [47]'s Jacobian) on its own track; outside the gate it counts a miss (released
-     after member_misses); an unassigned confirmed elementary track is gated on every
-     track without a member of this base and assigned by global nearest neighbour;
+     after member_misses); the range innovations of the members of confirmed tracks
+     in the gate update the base's clock offset ([C1]-[C2]); an unassigned confirmed
+     elementary track is gated on every track without a member of this base and
+     assigned by global nearest neighbour;
   4. one batched EKF update (001 [55]-[62], common.core.kalman) of the tracks hit;
   5. bookkeeping: a cycle with updates from >= 3 bases over >= 2 receivers counts one
      hit, confirm_cycles hits confirm; deletion after coast (coast_tentative) s;
@@ -24,7 +26,6 @@ time t (no common scan time):
 from __future__ import annotations
 
 import heapq
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -39,6 +40,7 @@ from common.core.track_table import Status
 from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.decorrelation import Decorrelator
 from common.radar.geometry.bistatic import BaseGeometry, project, project_jacobian
+from common.radar.network.clocks import Clocks
 from common.radar.network.initiation import Leftovers, Sites, initiate
 from common.radar.network.params import NetworkParams
 from common.radar.network.tracks import Tracks
@@ -60,16 +62,9 @@ class NetworkReport:
     has: np.ndarray
 
 
-def anchor_triples(receiver: np.ndarray) -> list[tuple[int, int, int]]:
-    """Base triples over 3 receivers (over 2 when the network has only 2)."""
-    need = min(3, np.unique(receiver).size)
-    return [c for c in itertools.combinations(range(receiver.size), 3)
-            if np.unique(receiver[list(c)]).size >= need]
-
-
 class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
-    `waiting` the gated triples deferred by max_triples."""
+    `waiting` the seed cells deferred by max_cells."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None
                  ) -> None:
@@ -78,8 +73,7 @@ class NetworkFusion:
         rx = np.array([b.rx for b in bases], dtype=float)
         _, rec = np.unique(np.round(rx, 3), axis=0, return_inverse=True)
         self.sites = Sites(np.array([b.tx for b in bases], dtype=float), rx, rec.ravel())
-        self.triples = anchor_triples(self.sites.receiver)
-        self.next_triple = 0
+        self.clocks = Clocks(len(bases), self.p.clock_sigma, self.p.clock_drift)
         self.dec = Decorrelator(self.p.sigma_gamma, self.p.sigma_omega, self.p.decor_gate)
         self.tracks = Tracks(self.p, self.sites.receiver)
         self.heap: list[tuple[float, int, int, ElementaryTracks]] = []
@@ -124,13 +118,12 @@ class NetworkFusion:
     def _step(self, b: int, t: float, tr: ElementaryTracks) -> list[NetworkReport]:
         """Steps 1-7 of the module doc for one report."""
         eq = self.dec.step(b, t, tr.id, tr.x, tr.P, tr.updated, tr.ambiguous)
-        R = eq.R.copy()
-        R[:, 0, 0] += (eq.z[:, 1] * self.p.clock_sigma) ** 2
+        z, R = self.clocks.correct(b, eq.z, eq.R)
         self.last[b] = tr
         T = self.tracks
         T.release_absent(b, tr.id)
         xp, Pp = T.predicted(t)
-        m = eq.z.shape[1]
+        m = z.shape[1]
         rows = np.flatnonzero(eq.ok)
         trk = np.array([T.member_of(b, int(e)) for e in tr.id[rows]], dtype=int)
         mem, free = rows[trk >= 0], rows[(trk < 0) & (tr.status[rows] == Status.CONFIRMED)]
@@ -141,14 +134,17 @@ class NetworkFusion:
         A = H @ Pp @ np.swapaxes(H, 1, 2)
         ang = [2] if m == 3 else []
         gam = chi2_gate(self.p.gate_prob, m)
-        _, _, d2 = pair_distances(h, A, eq.z, R, trk, mem, ang)
+        _, _, d2 = pair_distances(h, A, z, R, trk, mem, ang)
         hit = d2 <= gam
+        use = hit & (T.status[trk] == Status.CONFIRMED)
+        self.clocks.update(b, t, z[mem[use], 1], z[mem[use], 0] - h[trk[use], 0],
+                           A[trk[use], 0, 0] + eq.R[mem[use], 0, 0])
         T.count_misses(b, tr.id[mem[~hit]])
         up_t, up_r = list(trk[hit]), list(mem[hit])
         cand = np.flatnonzero(~T.has_base(b))
         if free.size and cand.size:
             ti, ji = np.repeat(cand, free.size), np.tile(free, cand.size)
-            _, _, d2f = pair_distances(h, A, eq.z, R, ti, ji, ang)
+            _, _, d2f = pair_distances(h, A, z, R, ti, ji, ang)
             cost = np.full((cand.size, free.size), np.inf)
             cost.ravel()[d2f <= gam] = d2f[d2f <= gam]
             r_i, c_i = gnn(cost)
@@ -158,7 +154,7 @@ class NetworkFusion:
                 up_r.append(int(c))
         if up_t:
             k, r = np.array(up_t), np.array(up_r)
-            x, P, _, _ = kalman.ekf_update(xp[k], Pp[k], eq.z[r], h[k], H[k], R[r], ang)
+            x, P, _, _ = kalman.ekf_update(xp[k], Pp[k], z[r], h[k], H[k], R[r], ang)
             T.updated(k, t, x, P, b)
         T.bookkeep(t)
         if t - self.last_init >= self.p.init_period:
@@ -177,29 +173,21 @@ class NetworkFusion:
             F = bistatic_F(dt)[:3, :3]
             x = tr.x[keep][:, :3] @ F.T
             P = F @ tr.P[keep][:, :3, :3] @ F.T + bistatic_Q(dt, self.p.sigma_gamma, 0.0)[:3, :3]
-            R = P[:, :2, :2].copy()
-            R[:, 0, 0] += (x[:, 1] * self.p.clock_sigma) ** 2
-            parts.append((np.full(x.shape[0], b), tr.id[keep], x[:, :2], R))
+            zc, R = self.clocks.correct(b, x[:, :2], P[:, :2, :2])
+            parts.append((np.full(x.shape[0], b), tr.id[keep], zc, R))
         if not parts:
             return Leftovers(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)),
                              np.zeros((0, 2, 2)))
         return Leftovers(*(np.concatenate(c) for c in zip(*parts)))
 
     def _initiate(self, t: float) -> None:
-        """Step 6: the next anchor triple whose bases all have leftovers."""
+        """Step 6 (common.radar.network.initiation)."""
         left = self._leftovers(t)
         with_left = np.unique(left.base)
         if with_left.size < 3 or np.unique(self.sites.receiver[with_left]).size < 2:
             return
         required = max(3, min(self.p.init_bases, with_left.size))
-        for _ in range(len(self.triples)):
-            anchors = self.triples[self.next_triple]
-            self.next_triple = (self.next_triple + 1) % len(self.triples)
-            if np.isin(anchors, with_left).all():
-                break
-        else:
-            return
-        opened, waiting = initiate(left, self.sites, anchors, required, self.p)
+        opened, waiting = initiate(left, self.sites, required, self.p)
         self.waiting += waiting
         for c in range(opened.members.shape[0]):
             x, P = opened.fix.x[c], opened.fix.P[c]

@@ -1,24 +1,21 @@
 """Opening global tracks from the leftover elementary tracks of a network (no azimuth).
 
-One round at time t, from the leftovers' [r_b, v_b] predicted to t, for an anchor triple
-of bases (a, b, c) spread over >= 2 receivers:
+One round at time t, from the leftovers' [r_b, v_b] predicted to t:
 
-1. pair gate (cheap, necessary): a point of the ellipsoid r_b of a base lies at a
-   distance in [(r_b - L)/2, (r_b + L)/2] from both its sites (L the baseline), so two
-   tracks of bases a, b can meet only if these shells, widened by pair_sigmas sigma_r,
-   reach each other across every distance between their sites;
-2. the triples whose three pairs pass are solved by Gauss-Newton on their three ranges
-   ([GN] of `localise`) from the seeds of the volume; every distinct converged solution
-   inside the z bounds is a candidate point (three ellipsoids may meet twice);
-3. extension: each other base's leftover closest in r_b within the gate of the
-   triple's covariance joins the candidate; candidates with fewer than `required`
+1. seed cells: coarse-to-fine voting of the leftovers' ellipsoidal shells in the
+   surveillance volume ([V] of `voting`), the most voted cells first;
+2. per cell and base, the leftover whose r_b is closest to the cell centre's r_b
+   within k sigma_r plus the cell's range margin; cells with fewer than `required`
    bases are dropped (ghosts: an exactly determined triple is always consistent,
-   over-determination is what tells them apart);
-4. `localise` ([GN], [LS], [FIM]) on all members, a re-gate of every base on [r_b, v_b]
-   with S = J P J' + R, `localise` again; a candidate is accepted when it still has
-   `required` bases over >= 2 receivers, chi2 <= its chi-square(2n - 6) quantile AND
-   chi2_v <= the chi-square(n - 3) quantile (range-rate consistency);
-5. the accepted candidates claim their members exclusively, most bases first, then
+   over-determination is what tells them apart), identical member sets kept once;
+3. `localise` ([GN], [LS], [FIM]) on all members from the cell centre and from its
+   (x, y) at each altitude of seed_z (least cost wins: the altitude valley of far
+   bases has local minima), a re-gate of
+   every base on [r_b, v_b] with S = J P J' + R, `localise` again; a candidate is
+   accepted when it still has `required` bases over >= 2 receivers, chi2 <= its
+   chi-square(2n - 6) quantile AND chi2_v <= the chi-square(n - 3) quantile
+   (range-rate consistency);
+4. the accepted candidates claim their members exclusively, most bases first, then
    least chi2 per degree of freedom.
 """
 
@@ -29,9 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.core.gating import chi2_gate, quadratic_form, window_pairs
-from common.radar.geometry.bistatic import bistatic_range, norm3, project, project_jacobian
-from common.radar.network.localise import Fix, gauss_newton, localise
+from common.radar.geometry.bistatic import bistatic_range, project, project_jacobian
+from common.radar.network.localise import Fix, localise
 from common.radar.network.params import NetworkParams
+from common.radar.network.voting import vote_cells
 
 
 @dataclass(frozen=True)
@@ -60,54 +58,6 @@ class Opened:
 
     fix: Fix
     members: np.ndarray
-
-
-def pair_gate(za: np.ndarray, sa: np.ndarray, zb: np.ndarray, sb: np.ndarray,
-              sites: Sites, a: int, b: int, k: float) -> np.ndarray:
-    """Step 1 for ranges za (n_a,), zb (n_b,) with sigmas sa, sb: (n_a, n_b) mask."""
-    la = norm3(sites.tx[a] - sites.rx[a])
-    lb = norm3(sites.tx[b] - sites.rx[b])
-    lo_a, hi_a = (za - la) / 2 - k * sa, (za + la) / 2 + k * sa
-    lo_b, hi_b = (zb - lb) / 2 - k * sb, (zb + lb) / 2 + k * sb
-    d = [norm3(u - w) for u in (sites.tx[a], sites.rx[a]) for w in (sites.tx[b], sites.rx[b])]
-    d_min, d_max = min(d), max(d)
-    return ((lo_a[:, None] - hi_b[None] <= d_min) & (lo_b[None] - hi_a[:, None] <= d_min)
-            & (d_max <= hi_a[:, None] + hi_b[None]))
-
-
-def _seeds(sites: Sites, anchors: tuple[int, int, int], p: NetworkParams) -> np.ndarray:
-    """Seeds: the anchor receivers' centroid and four points seed_xy around it, at
-    every altitude of seed_z."""
-    c = sites.rx[list(anchors), :2].mean(axis=0)
-    xy = c + np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]]) * p.seed_xy
-    return np.array([[x, y, z] for z in p.seed_z for x, y in xy])
-
-
-def triple_points(left: Leftovers, sites: Sites, anchors: tuple[int, int, int],
-                  p: NetworkParams) -> tuple[np.ndarray, np.ndarray, int]:
-    """Steps 1-2: candidate points (C, 3) with their anchor leftovers (C, 3), and the
-    number of gated triples left for a later round (max_triples)."""
-    rows = [np.flatnonzero(left.base == b) for b in anchors]
-    r = [left.z[i, 0] for i in rows]
-    s = [np.sqrt(left.R[i, 0, 0]) for i in rows]
-    g = {(u, w): pair_gate(r[u], s[u], r[w], s[w], sites, anchors[u], anchors[w], p.pair_sigmas)
-         for u, w in ((0, 1), (0, 2), (1, 2))}
-    i, j, k = np.nonzero(g[0, 1][:, :, None] & g[0, 2][:, None, :] & g[1, 2][None, :, :])
-    waiting = max(0, i.size - p.max_triples)
-    trip = np.column_stack([rows[0][i], rows[1][j], rows[2][k]])[:p.max_triples]
-    seeds = _seeds(sites, anchors, p)
-    n_s = seeds.shape[0]
-    base = np.array(anchors)
-    rep = np.repeat(trip, n_s, axis=0)
-    pos, cost, conv = gauss_newton(
-        np.tile(seeds, (trip.shape[0], 1)), left.z[rep, 0], 1.0 / left.R[rep, 0, 0],
-        np.broadcast_to(sites.tx[base], (rep.shape[0], 3, 3)),
-        np.broadcast_to(sites.rx[base], (rep.shape[0], 3, 3)), iters=25)
-    good = conv & (cost <= chi2_gate(p.init_prob, 1)) & (pos[:, 2] >= p.z_min) & (pos[:, 2] <= p.z_max)
-    owner = np.repeat(np.arange(trip.shape[0]), n_s)[good]
-    cell = np.round(pos[good] / 500.0).astype(np.int64)
-    _, first = np.unique(np.column_stack([owner, cell]), axis=0, return_index=True)
-    return pos[good][first], trip[owner[first]], waiting
 
 
 def _closest(pred: np.ndarray, half: np.ndarray, left: Leftovers, rows: np.ndarray
@@ -177,33 +127,28 @@ def _accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: Net
     return fix.ok & (n >= required) & (rec >= 2) & (fix.chi2 <= lim) & (fix.chi2_v <= lim_v)
 
 
-def initiate(left: Leftovers, sites: Sites, anchors: tuple[int, int, int], required: int,
-             p: NetworkParams) -> tuple[Opened, int]:
-    """Steps 1-5 for one anchor triple: the accepted candidates, and the number of
-    triples left waiting (max_triples)."""
+def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams
+             ) -> tuple[Opened, int]:
+    """Steps 1-4: the accepted candidates, and the number of seed cells left for a later
+    round (max_cells at the finest level)."""
     B = sites.tx.shape[0]
-    pts, trip, waiting = triple_points(left, sites, anchors, p)
+    pts, cut = vote_cells(left.base, left.z[:, 0], np.sqrt(left.R[:, 0, 0]), sites.tx,
+                        sites.rx, sites.receiver, required, p)
+    margin = 2 * np.sqrt(3.0) / 2 * p.cell_fine
+    k = np.sqrt(chi2_gate(p.gate_prob, 1))
     members = np.full((pts.shape[0], B), -1)
-    members[:, list(anchors)] = trip
-    if pts.shape[0]:
-        base = list(anchors)
-        d_t = pts[:, None] - sites.tx[base]
-        d_r = pts[:, None] - sites.rx[base]
-        J = d_t / norm3(d_t)[..., None] + d_r / norm3(d_r)[..., None]
-        info = np.einsum("cki,ck,ckj->cij", J, 1.0 / left.R[trip, 0, 0], J) + 1e-6 * np.eye(3)
-        k = np.sqrt(chi2_gate(p.gate_prob, 1))
-        for b in range(B):
-            rows = np.flatnonzero(left.base == b)
-            if b in anchors or rows.size == 0:
-                continue
-            pred = bistatic_range(pts, sites.tx[b], sites.rx[b])
-            g = (pts - sites.tx[b]) / norm3(pts - sites.tx[b])[:, None]
-            g += (pts - sites.rx[b]) / norm3(pts - sites.rx[b])[:, None]
-            var = quadratic_form(g, info) + left.R[rows, 0, 0].max()  # g' C g, C = info^-1
-            members[:, b] = _closest(pred, k * np.sqrt(var), left, rows)
+    for b in range(B):
+        rows = np.flatnonzero(left.base == b)
+        if rows.size:
+            half = np.full(pts.shape[0], k * np.sqrt(left.R[rows, 0, 0].max()) + margin)
+            members[:, b] = _closest(bistatic_range(pts, sites.tx[b], sites.rx[b]), half,
+                                     left, rows)
     keep = (members >= 0).sum(axis=1) >= required
-    members, pts = members[keep], pts[keep]
-    fix = _fix(left, sites, members, pts[:, None, :], p)
+    members, first = np.unique(members[keep], axis=0, return_index=True)
+    pts = pts[keep][first]
+    seeds = np.repeat(pts[:, None, :], 1 + len(p.seed_z), axis=1)
+    seeds[:, 1:, 2] = p.seed_z
+    fix = _fix(left, sites, members, seeds, p)
     members = _regate(fix, left, sites, p)
     fix = _fix(left, sites, members, fix.x[:, None, [0, 2, 4]], p)
     ok = _accepted(fix, members, sites, required, p)
@@ -219,4 +164,4 @@ def initiate(left: Leftovers, sites: Sites, anchors: tuple[int, int, int], requi
     sel = np.array(chosen, dtype=int)
     out = Fix(*(getattr(fix, f)[sel] for f in ("x", "P", "chi2", "chi2_r", "chi2_v", "n", "ok",
                                                "degenerate")))
-    return Opened(out, members[sel]), waiting
+    return Opened(out, members[sel]), cut

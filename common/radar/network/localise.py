@@ -140,5 +140,5 @@ def localise(z: np.ndarray, R: np.ndarray, tx: np.ndarray, rx: np.ndarray, valid
                     axis=1)
     count = valid.sum(axis=1)
     degenerate = singular | (worst > max_sigma) | (count < 3)
-    ok = found & ~degenerate & np.all(np.isfinite(x), axis=1)
+    ok = found & ~degenerate & np.all(np.isfinite(x), axis=1) & (x[:, 4] >= z_bounds[0])
     return Fix(x, P, chi2, chi2_r, chi2_v, count, ok, degenerate)

@@ -120,7 +120,8 @@ class Tracks:
         return bool((d2 <= chi2_gate(self.p.gate_prob, 3)).any())
 
     def bookkeep(self, t: float) -> None:
-        """Cycles, confirmation, coasting and deletion at t."""
+        """Cycles, confirmation, coasting and deletion at t (also of a track whose
+        altitude is below z_min by more than the gate: out of the volume)."""
         p = self.p
         for r in np.flatnonzero(t - self.cycle_start >= p.cycle).tolist():
             bs = list(self.cycle_bases[r])
@@ -136,7 +137,9 @@ class Tracks:
         self.status[live & (idle > 2 * p.cycle)] = Status.COASTING
         self.status[live & (idle <= 2 * p.cycle)] = Status.CONFIRMED
         too_old = tent & (t - self.born > (p.confirm_cycles + 2) * p.cycle)
-        dead = (live & (idle > p.coast)) | (tent & (idle > p.coast_tentative)) | too_old
+        k = np.sqrt(chi2_gate(p.gate_prob, 1))
+        below = self.x[:, 4] + k * np.sqrt(self.P[:, 4, 4]) < p.z_min
+        dead = (live & (idle > p.coast)) | (tent & (idle > p.coast_tentative)) | too_old | below
         for r in np.flatnonzero(dead)[::-1].tolist():
             for b, e in list(self.members[r].items()):
                 self._release(b, e)
