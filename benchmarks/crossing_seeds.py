@@ -55,7 +55,7 @@ the pair took one measurement (targets 1 deg apart: 000's unresolved interpretat
 but kept distinct rates (+2.1 and -0.7 deg/min, the targets' +1.9 and -0.6; d^2 = 69 over
 the whole state); a clutter-born track (born 10 deg away, -17 deg/min) confirmed beside
 it was re-linked as a lost target's track and replaced the rising track's state. Since
-then (mht_tracks `_end_by_relink`, `_merged`) the re-link ends the conflict with its
+then (mht.tracks `_end_by_relink`, `_merged`) the re-link ends the conflict with its
 memory (coalesced flag cleared, the re-linked track's state of the cycle is omega's), and
 a new track inside the gate of a pair whose main hypotheses took one measurement but are
 not within d_merge is deleted as a duplicate (`_duplicate`: the pair holds both targets;
@@ -135,7 +135,7 @@ Changes tried against that table (none kept; swap runs over seeds 1-160 unless s
     confirmed track's state is kept when its 004 flag rises, with its partner (the
     mutual-nearest flagged confirmed track in bearing); a track confirmed within 10 deg of
     a pair within d_merge of each other (coalesced) goes to the member whose entry state it
-    continues likelier (both pairings, the quiet model's F and Q, as mht_tracks.continuation),
+    continues likelier (both pairings, the quiet model's F and Q, as mht.tracks.continuation),
     which takes its state and register rows (its own rows since the entry leave it), and is
     deleted. Only once both left the memory mode (episode closed 24 scans after both were
     unflagged): 38 -> 38, it never fired on a failing seed (cross_slow 26 and cross_turn 36
@@ -222,7 +222,7 @@ a re-link or crossing_order exchanging the numbers of two resolved tracks:
     between the targets at 90.3, gave omega to #1: swap at t = 925); all else the same
     (seeds 1-160 and 161-320: break runs, false tracks and RMSE per scene identical to
     those of the tracker without it, measured at 0d5e975 on the same common.sonar code;
-    seeds 161-320 4dpm_eq 267 and 4dpm_uneq 169 swap runs). Kept (mht_tracks
+    seeds 161-320 4dpm_eq 267 and 4dpm_uneq 169 swap runs). Kept (mht.tracks
     `_coalesced_pick`): only when omega's bearing is outside the gate lambda of both
     members' predictions, the member whose state the pair's main hypothesis continues
     likelier keeps it and omega takes the other's place (else both pairings as before):

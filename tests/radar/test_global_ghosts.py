@@ -85,7 +85,7 @@ def test_the_merged_pair_keeps_the_confirmed_number() -> None:
     """The confirmed ghost (slot 1, base 2, 8 km up) is explained by the target's
     tentative track (slot 0, bases 0, 1) started this cycle: one track is left, with the
     target's state, all three bases and confirmation (tentative), under the ghost's
-    number and birth time (global_merge.number_kept; dense1000.toml: 6 of 77 switches)."""
+    number and birth time (fusion.merge.number_kept; dense1000.toml: 6 of 77 switches)."""
     gf = GlobalFusion([RadarBase(f"b{k}", TX[k], RX[k], ["c1"]) for k in range(4)],
                       FusionParams())
     tab = gf.table
@@ -112,7 +112,7 @@ def test_a_confirmed_located_track_is_not_dissolved() -> None:
     was located this cycle (module 64's joint test passed, which a pair of two targets
     fails; dense1000.toml seed 1: 6 of the 8 confirmed tracks dissolved held one
     aircraft's elementary tracks, each explained by wide-altitude neighbours), and
-    dissolved otherwise (global_merge.explained's held)."""
+    dissolved otherwise (fusion.merge.explained's held)."""
     other = TRUTH + [2000.0, 40.0, 1500.0, 0.0, 1000.0, 0.0]
     E = _etracks(np.stack([TRUTH, TRUTH, other, other, TRUTH, other]),
                  np.array([0, 1, 0, 1, 2, 3]))

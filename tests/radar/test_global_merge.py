@@ -121,7 +121,7 @@ def _coasting_and_new(new_confirmed: bool, now: list[int]) -> tuple:
 def test_the_track_with_contributors_is_kept_under_the_coasting_number() -> None:
     """A tentative new track: one track is left, with slot 1's state and elementary
     tracks, under the coasting track's number and birth time, tentative
-    (global_merge.number_kept)."""
+    (fusion.merge.number_kept)."""
     tab, out = _coasting_and_new(False, [])
     assert out.id.tolist() == [tab.id[0]] and tab.born[0] == 2.0 and not tab.confirmed[0]
     np.testing.assert_array_equal(out.x[0], TRUTH)

@@ -146,7 +146,7 @@ def test_scan_completed_by_a_time_already_seen_elsewhere() -> None:
 
 
 def test_components_as_scipy() -> None:
-    """plot_fusion.components labels every node as scipy's connected_components does
+    """plots.channel_fusion.components labels every node as scipy's connected_components does
     (numbering by smallest node), on random graphs with loops and repeated edges."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components

@@ -24,7 +24,7 @@ Cycle at t (001 figure 7):
     free elementary tracks of non-contributing bases, including to tracks in pure
     prediction (resolution loop); a base whose elementary tracks of two tracks pass
     [48] against each other's track is not used by either this scan
-    (global_assoc.ambiguous_members says why); a confirmed track that lost a member is
+    (fusion.assoc.ambiguous_members says why); a confirmed track that lost a member is
     rebuilt or floored by its sound members, any other confirmed track rebuilt when
     they contradict it (common.radar.fusion.reopen);
   module 62: new tracks from pairs of still free elementary tracks (tests 1-3, [44]-
@@ -42,7 +42,7 @@ Cycle at t (001 figure 7):
     froze it for 60 s, a false track holding a target's elementary tracks);
   module 64 + 65: per altitude band, localisation from the contributing updated
     elementary tracks (one whose v_b the others contradict is dissociated), then the
-    EKF update [49]-[50] of each component; weights, pruning, merging (global_filter);
+    EKF update [49]-[50] of each component; weights, pruning, merging (fusion.track_filter);
   module 61: score = sum of the contributing elementary scores; tracks without any
     contributor stay in pure prediction (status coasting) and are deleted after
     `max_coast` cycles; numbers are stable and recycled (common.core.track_table), a
@@ -137,8 +137,8 @@ class GlobalFusion:
         self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
         self.succession = Succession(self.p.max_coast)  # common.radar.fusion.succession
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
-        self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # global_assoc.ambiguous_members
-        self.segment_gate = chi2_gate(self.p.gate_prob, 6)  # global_segments
+        self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # fusion.assoc.ambiguous_members
+        self.segment_gate = chi2_gate(self.p.gate_prob, 6)  # fusion.segments
         self.az_gate = np.radians(self.p.az_gate_deg)
         self.pending: dict[float, dict[int, ElementaryTracks]] = {}
         self.t_last: float | None = None
@@ -181,7 +181,7 @@ class GlobalFusion:
         x, P, xm, Pm, c = self.filter.predict(tab, t, live)  # [55]-[56]
         row, lost = self._confirm(live, (c, xm, Pm), E, reported)
         held = live[tab.confirmed[live] & self.reopens]
-        held = held if self.p.reopen_watch else held[np.isin(held, lost)]  # global_reopen
+        held = held if self.p.reopen_watch else held[np.isin(held, lost)]  # fusion.reopen
         redo = reopen(held, self.filter, (x, P, xm, Pm, c), row, E, self.tx, self.rx, self.init_p,
                       self.p.gate_prob, floor=np.isin(held, lost))  # floored: lost a member
         free = np.ones(len(E), dtype=bool)
@@ -201,7 +201,7 @@ class GlobalFusion:
         now = tab.active_indices()
         withheld = ambiguous_members(c, xm, Pm, x, P, row, now[~np.isin(now, np.r_[new, redo])], E,
                                      self.tx, self.rx, self.az_gate, self.gamma_max, self.swap_gate)
-        withheld[redo] = True  # rebuilt from this scan's estimates (global_reopen)
+        withheld[redo] = True  # rebuilt from this scan's estimates (fusion.reopen)
         confirmed_now = self._update(t, now, new, x, P, (xm, Pm, c), E, row, withheld)
         return self._manage(t, E, row, confirmed_now)
 
@@ -209,9 +209,9 @@ class GlobalFusion:
                  E: ETrackSet, reported: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Module 63 task 1: row of E of every membership (cap, B) after dissociating
         members that left or fail the gate [48] in every live component of the
-        predicted mixture (weights, means, covariances; global_assoc.
+        predicted mixture (weights, means, covariances; fusion.assoc.
         gated_component_pairs says why), -1 where none or base not reported; and the
-        slots that lost a member (here, or by module 64's v_b test last cycle; global_reopen),
+        slots that lost a member (here, or by module 64's v_b test last cycle; fusion.reopen),
         whose confirmation count restarts if they are tentative."""
         tab = self.table
         row = np.full((tab.capacity, len(self.base_ids)), -1, dtype=np.intp)
@@ -237,7 +237,7 @@ class GlobalFusion:
                 E: ETrackSet, reported: np.ndarray, free: np.ndarray, row: np.ndarray) -> None:
         """Module 63 tasks 2-3: free elementary tracks of base b to the tracks of
         `slots` that do not contain b, by the resolution loop (gate [48] per mixture
-        component: global_assoc.gated_component_pairs)."""
+        component: fusion.assoc.gated_component_pairs)."""
         tab = self.table
         for b in np.flatnonzero(reported):
             tracks = slots[~tab.has[slots, b]]
@@ -310,7 +310,7 @@ class GlobalFusion:
                 row: np.ndarray, withheld: np.ndarray) -> np.ndarray:
         """Localisation (64) per altitude band, crossing test (004) on the combined
         prediction (x, P), EKF update (65) of every component of `models` (xm, Pm, c:
-        MixtureFilter.predict), weights, pruning, merging at t (global_filter); status;
+        MixtureFilter.predict), weights, pruning, merging at t (fusion.track_filter); status;
         `withheld` (cap, B): ambiguous memberships, not used. Returns the slots
         confirmed this cycle."""
         tab = self.table
@@ -320,11 +320,11 @@ class GlobalFusion:
         multi, single = n_act >= 2, n_act == 1
         xl, Pl, cl = models[0][live], models[1][live], models[2][live]
         fix = self.filter.locate(xl, Pl, cl, multi, r, active, E)  # module 64
-        active &= ~fix.dropped  # v_b leave-one-out test (global_filter): dissociated
+        active &= ~fix.dropped  # v_b leave-one-out test (fusion.track_filter): dissociated
         tab.has[live] &= ~fix.dropped
-        tab.suspect[live] = fix.dropped.any(axis=1)  # global_reopen, next cycle
+        tab.suspect[live] = fix.dropped.any(axis=1)  # fusion.reopen, next cycle
         row[live] = r = np.where(fix.dropped, -1, r)
-        tab.located[live] = located = fix.located  # global_merge.explained's held
+        tab.located[live] = located = fix.located  # fusion.merge.explained's held
         alpha, amb = self.crossing.step(t, tab.id[live], x[live][:, PLAN],  # 004, (x, y)
                                         P[live][:, PLAN][:, :, PLAN], z_meas=fix.post[:, :2],
                                         n_meas=int(located.sum()))

@@ -55,9 +55,9 @@ class FusionParams(InitParams):
         doc, "Seed path"): module 62's blocks [36]-[41] without altitude prior,
         [44]-[46] as written, one component with the fixed Q of [51] (q, q_z); the band
         and IMM parameters are then unused.
-    reopen_altitude: rebuild a contradicted track, floor an open one (global_reopen; "mixture").
+    reopen_altitude: rebuild a contradicted track, floor an open one (fusion.reopen; "mixture").
     reopen_watch: the rebuild's test also on every other confirmed track, every cycle
-        (global_reopen: tracks fed by their own elementary tracks at a wrong altitude).
+        (fusion.reopen: tracks fed by their own elementary tracks at a wrong altitude).
     segment_accel: standard deviation (m/s^2, per plan axis) of the constant acceleration
         a coasting track's aircraft may have held since its last update, in the test of
         the track segment association (common.radar.fusion.segments); 0 turns it off.

@@ -127,7 +127,7 @@ class MixtureFilter:
     def initial(self, xb: np.ndarray, Pb: np.ndarray, wb: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Mixtures (xm, Pm, mu) of new tracks from their altitude bands (means, covariances,
-        weights: global_init.altitude_bands), every band in every model with the chain's
+        weights: fusion.initiation.altitude_bands), every band in every model with the chain's
         stationary probabilities, pruned (band_prune_init) and merged."""
         M = self.mu0.size
         xm, Pm = np.repeat(xb, M, axis=1), np.repeat(Pb, M, axis=1)
@@ -181,7 +181,7 @@ class MixtureFilter:
                     E: ETrackSet) -> np.ndarray:
         """(n, B) the contributor to leave out (module doc): in a located track of >= 3
         active contributors, the one whose v_b row of [49] fails the leave-one-out test
-        (global_ekf.vb_deletion_residuals) the most, under the heaviest band that passed,
+        (fusion.ekf.vb_deletion_residuals) the most, under the heaviest band that passed,
         at the chi-square(1) threshold of the largest of n rows (max_gate)."""
         drop = np.zeros(active.shape, dtype=bool)
         i = np.flatnonzero(bok.any(axis=1) & (active.sum(axis=1) >= 3))

@@ -45,7 +45,7 @@ class TrackerParams(Params):
     d_thr: detection threshold D_thr (dB level) of the amplitude laws.
     clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
         its predicted amplitude (000 erfc law) and P_FA of a detection from its level
-        (bearing_model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
+        (bearing.model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
         Off by default: on the tuned 4 deg/min unequal-speed crossing
         (sonar_cross_4dpm_uneq, 50 runs through the processes) the law at 2 dB gave 4
         swap runs with crossing management (0 without it) and 15 without (4); the

@@ -39,7 +39,7 @@ Deviations (stated):
   of its track: a confirmed split-off of a clutter hypothesis was a confirmed false
   track, and a duplicate of the target until the SPRT removed it) and shares the
   register of its track up to the split; one that departs from its prediction more
-  than the track's heaviest takes a new track's rates (`mht_hypotheses.split_off_rates`).
+  than the track's heaviest takes a new track's rates (`mht.hypotheses.split_off_rates`).
 - Re-link at the end of a conflict: "track omega is linked to the past of track i" is
   implemented as track i continuing with omega's hypotheses and state of this cycle (its
   number and register kept, its own hypotheses dropped) and omega removed. The seed
@@ -150,7 +150,7 @@ class MhtTracker:
         F = self.transition(T)
         self.k += 1
 
-        self.hx, self.hP, self.hc, self.ht, self.hm, src = branch(  # models (mht_models)
+        self.hx, self.hP, self.hc, self.ht, self.hm, src = branch(  # models (mht.models)
             self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
         self.hmeas = self.hmeas[src]
         Qm = np.stack([self.process_noise(T, q) for q in self.q_models])
