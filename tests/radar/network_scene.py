@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.core import kalman
+from common.core.gating import quadratic_form
 from common.core.motion import bistatic_F, bistatic_Q
 from common.core.track_table import Status
 from common.radar.elementary.tracker import ElementaryTracks
@@ -155,3 +156,62 @@ def crlb_position(bases: list[Base], pos: np.ndarray, vel: np.ndarray) -> np.nda
         info += np.swapaxes(J, 1, 2) @ Ri @ J
     C = np.linalg.inv(info)
     return np.sqrt(C[:, 0, 0] + C[:, 2, 2] + C[:, 4, 4])
+
+
+@dataclass
+class Score:
+    """Counts over the reports after ``warm_up``: missed aircraft, duplicates, false tracks
+    (confirmed, farther than ``near`` from every aircraft), number switches; per aircraft
+    the mean squared position error, mean squared CRLB and the number of samples."""
+
+    missed: int
+    duplicates: int
+    false: int
+    switches: int
+    scans: int
+    err2: np.ndarray
+    crlb2: np.ndarray
+    cnt: np.ndarray
+    nees: float
+
+    def rmse_over_crlb(self) -> float:
+        """Position RMSE over the rms CRLB, pooled over every aircraft and sample."""
+        return float(np.sqrt(np.sum(self.err2 * self.cnt) / max(np.sum(self.crlb2 * self.cnt), 1e-300)))
+
+
+def score(scene: Scene, reports: list, warm_up: float = 15.0, near: float = 2000.0) -> Score:
+    """Each confirmed track of a report (NetworkReport) against its nearest aircraft."""
+    n = scene.p0.shape[0]
+    missed = dup = false = switches = scans = 0
+    err2, crlb2, cnt = np.zeros(n), np.zeros(n), np.zeros(n)
+    holder = np.full(n, -1)
+    nees: list[np.ndarray] = []
+    for rep in reports:
+        if rep.t < warm_up:
+            continue
+        scans += 1
+        pos, vel = scene.truth(rep.t)
+        conf = rep.status != Status.TENTATIVE
+        X = rep.x[conf][:, [0, 2, 4]]
+        d = np.linalg.norm(X[:, None] - pos[None], axis=2) if X.size else np.full((0, n), np.inf)
+        a = d.argmin(axis=1) if X.size else np.zeros(0, dtype=int)
+        dist = d[np.arange(a.size), a]
+        ok = dist <= near
+        false += int((~ok).sum())
+        held = np.bincount(a[ok], minlength=n)
+        missed += int((held == 0).sum())
+        dup += int((held > 1).sum())
+        ids = np.full(n, -1)
+        for i in np.flatnonzero(ok)[np.argsort(-dist[ok])]:  # the nearest track last
+            ids[a[i]] = rep.id[conf][i]
+        switches += int(((holder >= 0) & (ids >= 0) & (ids != holder)).sum())
+        holder = np.where(ids >= 0, ids, holder)
+        e = X[ok] - pos[a[ok]]
+        np.add.at(err2, a[ok], np.sum(e ** 2, axis=1))
+        np.add.at(crlb2, a[ok], crlb_position(scene.bases, pos[a[ok]], vel[a[ok]]) ** 2)
+        np.add.at(cnt, a[ok], 1)
+        C = rep.P[conf][ok][:, [0, 2, 4]][:, :, [0, 2, 4]]
+        nees.append(quadratic_form(e, C))
+    c = np.maximum(cnt, 1)
+    return Score(missed, dup, false, switches, scans, err2 / c, crlb2 / c, cnt,
+                 float(np.concatenate(nees).mean()) if nees else float("nan"))

@@ -22,51 +22,6 @@ from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.network.fusion import NetworkFusion, NetworkReport
 from tests.radar import network_scene as ns
 
-WARM_UP = 15.0
-NEAR = 2000.0  # m
-
-
-@dataclasses.dataclass
-class Score:
-    """Counts over the reports after warm-up; err2, crlb2 per aircraft (mean squares)."""
-
-    missed: int
-    duplicates: int
-    false: int
-    scans: int
-    err2: np.ndarray
-    crlb2: np.ndarray
-    nees: float
-
-
-def score(scene: ns.Scene, reports: list[NetworkReport]) -> Score:
-    n = scene.p0.shape[0]
-    missed = dup = false = scans = 0
-    err2, crlb2, cnt = np.zeros(n), np.zeros(n), np.zeros(n)
-    nees: list[np.ndarray] = []
-    for rep in reports:
-        if rep.t < WARM_UP:
-            continue
-        scans += 1
-        pos, vel = scene.truth(rep.t)
-        conf = rep.status != Status.TENTATIVE
-        X = rep.x[conf][:, [0, 2, 4]]
-        d = np.linalg.norm(X[:, None] - pos[None], axis=2)
-        a, near = d.argmin(axis=1), d.min(axis=1)
-        false += int((near > NEAR).sum())
-        held = np.bincount(a[near <= NEAR], minlength=n)
-        missed += int((held == 0).sum())
-        dup += int((held > 1).sum())
-        ok = near <= NEAR
-        e = X[ok] - pos[a[ok]]
-        np.add.at(err2, a[ok], np.sum(e ** 2, axis=1))
-        np.add.at(crlb2, a[ok], ns.crlb_position(scene.bases, pos[a[ok]], vel[a[ok]]) ** 2)
-        np.add.at(cnt, a[ok], 1)
-        C = rep.P[conf][ok][:, [0, 2, 4]][:, :, [0, 2, 4]]
-        nees.append(np.einsum("ni,ni->n", e, np.linalg.solve(C, e[..., None])[..., 0]))
-    c = np.maximum(cnt, 1)
-    return Score(missed, dup, false, scans, err2 / c, crlb2 / c,
-                 float(np.concatenate(nees).mean()) if nees else np.nan)
 
 
 @functools.lru_cache(maxsize=None)
@@ -92,7 +47,7 @@ def run(seed: int, kind: str = "random", clock: float = 0.0, duration: float = 4
 def test_every_aircraft_held_accurately(seed: int) -> None:
     scene, reports, fusion = run(seed)
     assert len(scene.bases) >= 20 and len({tuple(b.rx) for b in scene.bases}) >= 8
-    s = score(scene, reports)
+    s = ns.score(scene, reports)
     assert s.scans >= 25 and fusion.rejected == {}
     assert (s.missed, s.duplicates, s.false) == (0, 0, 0)
     ratio = np.sqrt(s.err2 / s.crlb2)
@@ -103,7 +58,7 @@ def test_every_aircraft_held_accurately(seed: int) -> None:
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_ghost_line(seed: int) -> None:
     scene, reports, _ = run(seed, "line")
-    s = score(scene, reports)
+    s = ns.score(scene, reports)
     assert s.false < 0.01 * 24 * s.scans
     assert s.missed == 0
 
@@ -115,7 +70,7 @@ def test_clock_offsets_up_to_0_2_s(seed: int) -> None:
     within 0.05 s up to their common part (unobservable). Not asserted: NEES and RMSE
     against the run without offsets (not met, docs/networks.md)."""
     scene, reports, fusion = run(seed, clock=0.2)
-    s = score(scene, reports)
+    s = ns.score(scene, reports)
     assert (s.missed, s.duplicates, s.false) == (0, 0, 0)
     off = np.array([b.clock for b in scene.bases])
     est = fusion.clocks.c
@@ -170,5 +125,5 @@ def test_ghost_formation(seed: int) -> None:
     out: list[NetworkReport] = []
     for b, t, rep in scene.reports:
         out += fusion.push(bases[b].id, t, rep)
-    s = score(scene, out + fusion.flush())
+    s = ns.score(scene, out + fusion.flush())
     assert s.false < 0.01 * 20 * s.scans
