@@ -23,7 +23,6 @@ from common.radar.network.fusion import NetworkFusion, NetworkReport
 from tests.radar import network_scene as ns
 
 
-
 @functools.lru_cache(maxsize=None)
 def run(seed: int, kind: str = "random", clock: float = 0.0, duration: float = 45.0
         ) -> tuple[ns.Scene, list[NetworkReport], NetworkFusion]:
