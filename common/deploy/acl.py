@@ -28,6 +28,8 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
+import zenoh
+
 from common.deploy.config import Config, ConfigError
 from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, token_name
 
@@ -169,7 +171,9 @@ def _router_rules(name: str, members: list[Grant], root: str) -> list[dict[str, 
     declarations a router passes on for them: queryables its members may query, liveliness
     interest in and queries of its members' tokens (answered by it)."""
     def union(attr: str) -> list[str]:
-        return sorted({k for g in members for k in getattr(g, attr)})
+        """The members' keys of ``attr``, without those another one includes."""
+        keys = {zenoh.KeyExpr(k) for g in members for k in getattr(g, attr)}
+        return sorted(str(k) for k in keys if not any(o != k and o.includes(k) for o in keys))
 
     u = Grant(publish=union("publish"), subscribe=union("subscribe"), tokens=union("tokens"),
               serve=union("serve"), query=union("query"),

@@ -180,6 +180,55 @@ def test_generated_access_control(tmp_path: Path) -> None:
     assert all(s.get("usernames") == [s["id"]] for s in acl["subjects"])  # no mTLS here
 
 
+BOUND = MIXED + """
+[zenoh.tls]
+root_ca = "ca.pem"
+mtls = true
+
+[zenoh.tls.hosts]
+host-north = ["site-north", "channel-plotter-b1", "elementary-tracker-b1", "operator"]
+host-fusion = ["global-fusion", "operator"]
+"""
+
+
+def test_identities_are_bound_to_their_hosts_certificates(tmp_path: Path) -> None:
+    """Under mutual TLS a subject is a username AND the common names of the hosts that
+    run it ([zenoh.tls.hosts]); router-<site> needs its own common name, router-fusion
+    is known by its common name alone; an identity that no host runs has no subject
+    (denied everything). A site router may serve and declare tokens of its own site only.
+    A table naming a router, a router's common name or an unknown identity, a table
+    without mutual TLS and mutual TLS without the table are ConfigErrors."""
+    (tmp_path / "d.toml").write_text(BOUND)
+    acl = access_control(load(tmp_path / "d.toml"))
+    subjects = {s["id"]: {k: v for k, v in s.items() if k != "id"} for s in acl["subjects"]}
+    assert subjects["site-north"] == {"usernames": ["site-north"],
+                                      "cert_common_names": ["host-north"]}
+    assert subjects["operator"] == {"usernames": ["operator"],
+                                    "cert_common_names": ["host-north", "host-fusion"]}
+    assert subjects["router-south"] == {"usernames": ["router-south"],
+                                        "cert_common_names": ["router-south"]}
+    assert subjects["router-fusion"] == {"cert_common_names": ["router-fusion"]}
+    assert "site-south" not in subjects and "tma-a1" not in subjects
+    history, token = f"{ROOT}/sonar/history/a1/1", f"{ROOT}/alive/tma/a1"
+    for router, ok in (("router-north", True), ("router-south", False)):
+        assert allowed(acl, router, "ingress", "declare_queryable", history) is ok
+        assert allowed(acl, router, "egress", "query", history) is ok
+        assert allowed(acl, router, "ingress", "liveliness_token", token) is ok
+    for hosts, key in (('host-north = ["router-north"]', "zenoh.tls.hosts.host-north"),
+                       ('router-fusion = ["operator"]', "zenoh.tls.hosts"),
+                       ('host-north = ["tma-a9"]', "zenoh.tls.hosts.host-north")):
+        (tmp_path / "d.toml").write_text(BOUND.split("[zenoh.tls.hosts]")[0]
+                                         + f"[zenoh.tls.hosts]\n{hosts}\n")
+        with pytest.raises(ConfigError) as e:
+            access_control(load(tmp_path / "d.toml"))
+        assert e.value.key == key, hosts
+    for text in (BOUND.split("[zenoh.tls.hosts]")[0], BOUND.replace("mtls = true", "")):
+        (tmp_path / "d.toml").write_text(text)
+        with pytest.raises(ConfigError) as e:
+            access_control(load(tmp_path / "d.toml"))
+        assert e.value.key == "zenoh.tls.hosts"
+
+
 KEYS = ["radar/plots/b1/c1", "radar/plots/b1/c2", "radar/plots/b2/c1", "radar/plots/b1",
         "radar/fused/b1", "radar/fused/b2", "radar/etracks/b1", "radar/etracks/b2",
         "radar/gtracks", "sonar/detections/a1", "sonar/detections/a2", "sonar/btracks/a1",
