@@ -9,10 +9,17 @@ metrics and liveliness keys, the operator only reads, and only ``global-fusion``
 publishes ``radar/gtracks``. Flows are seen from the router: *ingress* is what a client
 sends to it, *egress* what it sends to a client.
 
-Routers: a site router logs in upstream as ``router-<site>`` and may forward what the
-identities of its site may publish; the upstream router is recognised by a site router
-only by its certificate's common name ``router-fusion`` (mutual TLS: Zenoh's
-user/password authentication is one-way, the accepting side checks the connecting one).
+Under mutual TLS each identity is also bound to certificates: a subject with both
+``usernames`` and ``cert_common_names`` matches only when both do (verified on 1.10.2),
+so a password works only with the certificate of a host that runs its identity
+([zenoh.tls.hosts]), and ``router-<site>`` only with the certificate of common name
+``router-<site>``.
+
+Routers: a site router logs in upstream as ``router-<site>`` and may pass exactly what
+the identities of its site may send and receive (:func:`site_members`); the upstream
+router is recognised by a site router only by its certificate's common name
+``router-fusion`` (mutual TLS: Zenoh's user/password authentication is one-way, the
+accepting side checks the connecting one).
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from typing import Any
+
+import zenoh
 
 from common.deploy.config import Config, ConfigError
 from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, token_name
@@ -133,8 +142,11 @@ def _rule(rid: str, flows: list[str], messages: list[str], root: str, keys: list
             "key_exprs": [f"{root}/{k}" for k in keys]}
 
 
-def _rules(name: str, g: Grant, root: str) -> list[dict[str, Any]]:
-    """The allow rules of one identity (empty key lists give no rule)."""
+def _rules(name: str, g: Grant, root: str,
+           more: tuple[tuple[str, list[str], list[str], list[str]], ...] = ()
+           ) -> list[dict[str, Any]]:
+    """The allow rules of one identity, and ``more`` (what, flows, messages, keys) parts
+    (empty key lists give no rule)."""
     parts = [
         ("publish", ["ingress"], ["put"], g.publish),
         ("readers", ["egress"], ["declare_subscriber"], ["**"] if g.publish else []),
@@ -148,34 +160,68 @@ def _rules(name: str, g: Grant, root: str) -> list[dict[str, Any]]:
         ("alive", ["ingress"], ["declare_liveliness_subscriber", "liveliness_query"],
          ["alive/**"] if g.watch_alive else []),
         ("alive-in", ["egress"], ["liveliness_token", "reply"], ["alive/**"] if g.watch_alive else []),
+        *more,
     ]
     return [_rule(f"{name}/{what}", flows, msgs, root, keys) for what, flows, msgs, keys in parts
             if keys]
 
 
 def _router_rules(name: str, members: list[Grant], root: str) -> list[dict[str, Any]]:
-    """A site router: ingress puts, tokens and replies of its members only; declarations,
-    queries and everything towards it on the whole root."""
-    union = Grant(publish=sorted({k for g in members for k in g.publish}),
-                  tokens=sorted({k for g in members for k in g.tokens}))
-    serve = sorted({k for g in members for k in g.serve})
-    return [
-        _rule(f"{name}/publish", ["ingress"], ["put"], root, union.publish),
-        _rule(f"{name}/token", ["ingress"], ["liveliness_token"], root, union.tokens),
-        _rule(f"{name}/reply", ["ingress"], ["reply"], root, [*serve, "alive/**"]),
-        _rule(f"{name}/declare", ["ingress", "egress"],
-              ["declare_subscriber", "declare_queryable", "declare_liveliness_subscriber",
-               "liveliness_query", "query"], root, ["**"]),
-        _rule(f"{name}/forward", ["egress"], ["put", "liveliness_token", "reply"], root, ["**"]),
-    ]
+    """A site router: what its members may send (ingress) and receive (egress), and the
+    declarations a router passes on for them: queryables its members may query, liveliness
+    interest in and queries of its members' tokens (answered by it)."""
+    def union(attr: str) -> list[str]:
+        """The members' keys of ``attr``, without those another one includes."""
+        keys = {zenoh.KeyExpr(k) for g in members for k in getattr(g, attr)}
+        return sorted(str(k) for k in keys if not any(o != k and o.includes(k) for o in keys))
+
+    u = Grant(publish=union("publish"), subscribe=union("subscribe"), tokens=union("tokens"),
+              serve=union("serve"), query=union("query"),
+              watch_alive=any(g.watch_alive for g in members))
+    return _rules(name, u, root, (
+        ("queryables", ["egress"], ["declare_queryable"], u.query),
+        ("watchers", ["egress"], ["declare_liveliness_subscriber", "liveliness_query"], u.tokens),
+        ("token-replies", ["ingress"], ["reply"], u.tokens)))
+
+
+def hosts_of(cfg: Config) -> dict[str, list[str]] | None:
+    """Identity -> common names of the certificates it may use ([zenoh.tls.hosts]); None
+    without mutual TLS (no client certificate to bind to). ConfigError when the table is
+    missing or names an unknown identity, a router, or a router's common name."""
+    tls = cfg.zenoh.tls
+    hosts = tls.hosts if tls is not None else {}
+    if tls is None or not tls.mtls:
+        if hosts:
+            raise ConfigError("zenoh.tls.hosts", "binds identities to client certificates, "
+                                                 "which only mutual TLS has: set mtls = true")
+        return None
+    if not hosts:
+        raise ConfigError("zenoh.tls.hosts", "missing: under mutual TLS every identity is bound "
+                                             "to the common names of the hosts that run it "
+                                             "(docs/security.md)")
+    known = grants(cfg)
+    routers = {ROUTER_FUSION, *(router_identity(s.id) for s in cfg.sites)}
+    out: dict[str, list[str]] = {}
+    for cn, names in hosts.items():
+        if cn in routers:
+            raise ConfigError("zenoh.tls.hosts", f"{cn!r} is a router's common name, not a host's")
+        for n in names:
+            if n not in known:
+                raise ConfigError(f"zenoh.tls.hosts.{cn}", f"{n!r} is not an identity of the "
+                                  f"deployment (`pfusion acl` lists them; routers are bound to "
+                                  f"their own certificates)")
+            out.setdefault(n, []).append(cn)
+    return out
 
 
 def access_control(cfg: Config) -> dict[str, Any]:
     """The router's ``access_control`` section: deny by default, an allow rule set and a
-    subject (its username) per identity, plus ``router-fusion`` by certificate common
-    name under mutual TLS."""
+    subject per identity, its username and, under mutual TLS, the common names of its
+    hosts (an identity that no host runs gets none: denied); ``router-<site>`` with its
+    own common name, and ``router-fusion`` by common name alone."""
     root = cfg.zenoh.root
     g = grants(cfg)
+    cns = hosts_of(cfg)
     rules, subjects, policies = [], [], []
 
     def add(name: str, rs: list[dict[str, Any]], subject: dict[str, Any]) -> None:
@@ -186,13 +232,18 @@ def access_control(cfg: Config) -> dict[str, Any]:
         subjects.append({"id": name, **subject})
         policies.append({"id": name, "rules": [r["id"] for r in rs], "subjects": [name]})
 
+    def subject(name: str, names: list[str]) -> dict[str, Any]:
+        return {"usernames": [name]} if cns is None else {"usernames": [name],
+                                                          "cert_common_names": names}
+
     for name, grant in g.items():
-        add(name, _rules(name, grant, root), {"usernames": [name]})
+        if cns is None or name in cns:
+            add(name, _rules(name, grant, root), subject(name, cns[name] if cns else []))
     for s in cfg.sites:
         name = router_identity(s.id)
         add(name, _router_rules(name, [g[m] for m in site_members(cfg, s.id) if m in g], root),
-            {"usernames": [name]})
-    if cfg.zenoh.tls is not None and cfg.zenoh.tls.mtls:
+            subject(name, [name]))
+    if cns is not None:
         add(ROUTER_FUSION, [_rule(f"{ROUTER_FUSION}/all", ["ingress", "egress"], ALL_MESSAGES,
                                   root, ["**"])], {"cert_common_names": [ROUTER_FUSION]})
     return {"enabled": True, "default_permission": "deny", "rules": rules,

@@ -60,7 +60,10 @@ class TlsConfig:
     router_cert, router_key: a router's certificate and key (listening, and towards an
         upstream router); common name = the router's identity (`router-fusion`,
         `router-<site>`); readable by the router only.
-    mtls: mutual TLS: every client and router presents a certificate of the CA."""
+    mtls: mutual TLS: every client and router presents a certificate of the CA.
+    hosts: [zenoh.tls.hosts], needs mtls: the common name of each host's `cert` -> the
+        identities that run on that host; the access control accepts an identity only
+        with one of its hosts' certificates (a router's only with its own)."""
 
     root_ca: str = ""
     cert: str = ""
@@ -68,6 +71,7 @@ class TlsConfig:
     router_cert: str = ""
     router_key: str = ""
     mtls: bool = False
+    hosts: dict[str, list[str]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -369,6 +373,11 @@ def _coerce(value: Any, hint: Any, key: str) -> Any:
         inner = args[0] if args else Any
         out = [_coerce(v, inner, key) for v in value]
         return out if origin is list else tuple(out)
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise ConfigError(key, "expected a table")
+        k_hint, v_hint = typing.get_args(hint)
+        return {_coerce(k, k_hint, key): _coerce(v, v_hint, f"{key}.{k}") for k, v in value.items()}
     if hint is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(key, f"expected a number, got {value!r}")

@@ -35,7 +35,7 @@ SECTIONS: dict[str, type] = {
     "sonar.tma.bounds": BoundsParams,
     "sonar.tma.bounds.*": BoundsParams,
 }
-STRUCTURE = ("zenoh", "zenoh.auth", "zenoh.tls", "radar", "radar.origin", "sonar", "sim")
+STRUCTURE = ("zenoh", "zenoh.auth", "zenoh.tls", "zenoh.tls.hosts", "radar", "radar.origin", "sonar", "sim")
 
 
 def check_tables(cfg: Config) -> None:

@@ -140,6 +140,11 @@ def test_security_tables_and_sites(tmp_path: Path) -> None:
     assert cfg.zenoh.auth.dictionary == "/etc/pfusion/dictionary.txt"
     assert cfg.zenoh.auth.access_control
     assert cfg.zenoh.tls.root_ca == str(tmp_path / "pki/ca.pem") and cfg.zenoh.tls.cert == ""
+    assert cfg.zenoh.tls.hosts == {}
+    hosts = load(write(tmp_path, SECURE.replace("mtls = true", 'mtls = true\n[zenoh.tls.hosts]\n'
+                                                 'host-rx1 = ["site-rx1", "operator"]')))
+    assert hosts.zenoh.tls is not None
+    assert hosts.zenoh.tls.hosts == {"host-rx1": ["site-rx1", "operator"]}
     assert [(s.id, s.bases, s.arrays) for s in cfg.sites] == [("rx1", ["b1"], ["a1"])]
     plain = load(write(tmp_path, GOOD))
     assert plain.zenoh.auth is None and plain.zenoh.tls is None
@@ -151,6 +156,8 @@ def test_security_tables_and_sites(tmp_path: Path) -> None:
     (('credentials = "creds.txt"', 'credential = "creds.txt"'), "zenoh.auth.credential"),
     (('root_ca = "pki/ca.pem"', 'cert = "host.pem"'), "zenoh.tls.root_ca"),
     (("mtls = true", 'mtls = "yes"'), "zenoh.tls.mtls"),
+    (("mtls = true", 'mtls = true\nhosts = ["h"]'), "zenoh.tls.hosts"),
+    (("mtls = true", 'mtls = true\nhosts = {h = "site-rx1"}'), "zenoh.tls.hosts.h"),
     (('bases = ["b1"]', 'bases = ["b9"]'), "site[0].bases"),
     (('arrays = ["a1"]', 'arrays = "a1"'), "site[0].arrays"),
     (('id = "rx1"', 'id = "rx/1"'), "site[0].id"),

@@ -6,7 +6,10 @@ generated from the deployment (common.deploy.acl).
 Shown: a client without credentials, with a wrong password, or with a certificate of
 another CA cannot connect; a site's identity cannot publish another base's plots nor
 global tracks (the samples never reach a subscriber, while its own base's plots do),
-also through a site router; the operator cannot publish; the radar chain of
+also through a site router; the operator cannot publish; a stolen password does nothing
+with the certificate of a host that does not run its identity, and a site router's
+password does nothing without the router's certificate (no reads, no forged history
+replies, no liveliness of a stopped service: issue 33); the radar chain of
 two_targets.toml with all of it on gives the global tracks of the in-process chain."""
 
 from __future__ import annotations
@@ -74,6 +77,13 @@ key = "host.key"
 router_cert = "{router}.pem"
 router_key = "{router}.key"
 mtls = true
+
+[zenoh.tls.hosts]
+host = ["site-rx1", "channel-plotter-b1", "elementary-tracker-b1", "channel-plotter-b2",
+        "elementary-tracker-b2", "channel-plotter-b3", "elementary-tracker-b3",
+        "bearing-tracker-a1", "tma-a1", "global-fusion", "evaluate", "operator",
+        "supervisor", "simulator"]
+host-rx2 = ["site-rx2"]
 """
 
 
@@ -170,6 +180,55 @@ def test_generated_access_control(tmp_path: Path) -> None:
     assert all(s.get("usernames") == [s["id"]] for s in acl["subjects"])  # no mTLS here
 
 
+BOUND = MIXED + """
+[zenoh.tls]
+root_ca = "ca.pem"
+mtls = true
+
+[zenoh.tls.hosts]
+host-north = ["site-north", "channel-plotter-b1", "elementary-tracker-b1", "operator"]
+host-fusion = ["global-fusion", "operator"]
+"""
+
+
+def test_identities_are_bound_to_their_hosts_certificates(tmp_path: Path) -> None:
+    """Under mutual TLS a subject is a username AND the common names of the hosts that
+    run it ([zenoh.tls.hosts]); router-<site> needs its own common name, router-fusion
+    is known by its common name alone; an identity that no host runs has no subject
+    (denied everything). A site router may serve and declare tokens of its own site only.
+    A table naming a router, a router's common name or an unknown identity, a table
+    without mutual TLS and mutual TLS without the table are ConfigErrors."""
+    (tmp_path / "d.toml").write_text(BOUND)
+    acl = access_control(load(tmp_path / "d.toml"))
+    subjects = {s["id"]: {k: v for k, v in s.items() if k != "id"} for s in acl["subjects"]}
+    assert subjects["site-north"] == {"usernames": ["site-north"],
+                                      "cert_common_names": ["host-north"]}
+    assert subjects["operator"] == {"usernames": ["operator"],
+                                    "cert_common_names": ["host-north", "host-fusion"]}
+    assert subjects["router-south"] == {"usernames": ["router-south"],
+                                        "cert_common_names": ["router-south"]}
+    assert subjects["router-fusion"] == {"cert_common_names": ["router-fusion"]}
+    assert "site-south" not in subjects and "tma-a1" not in subjects
+    history, token = f"{ROOT}/sonar/history/a1/1", f"{ROOT}/alive/tma/a1"
+    for router, ok in (("router-north", True), ("router-south", False)):
+        assert allowed(acl, router, "ingress", "declare_queryable", history) is ok
+        assert allowed(acl, router, "egress", "query", history) is ok
+        assert allowed(acl, router, "ingress", "liveliness_token", token) is ok
+    for hosts, key in (('host-north = ["router-north"]', "zenoh.tls.hosts.host-north"),
+                       ('router-fusion = ["operator"]', "zenoh.tls.hosts"),
+                       ('host-north = ["tma-a9"]', "zenoh.tls.hosts.host-north")):
+        (tmp_path / "d.toml").write_text(BOUND.split("[zenoh.tls.hosts]")[0]
+                                         + f"[zenoh.tls.hosts]\n{hosts}\n")
+        with pytest.raises(ConfigError) as e:
+            access_control(load(tmp_path / "d.toml"))
+        assert e.value.key == key, hosts
+    for text in (BOUND.split("[zenoh.tls.hosts]")[0], BOUND.replace("mtls = true", "")):
+        (tmp_path / "d.toml").write_text(text)
+        with pytest.raises(ConfigError) as e:
+            access_control(load(tmp_path / "d.toml"))
+        assert e.value.key == "zenoh.tls.hosts"
+
+
 KEYS = ["radar/plots/b1/c1", "radar/plots/b1/c2", "radar/plots/b2/c1", "radar/plots/b1",
         "radar/fused/b1", "radar/fused/b2", "radar/etracks/b1", "radar/etracks/b2",
         "radar/gtracks", "sonar/detections/a1", "sonar/detections/a2", "sonar/btracks/a1",
@@ -238,10 +297,11 @@ class Secure:
 def deployment_files(d: Path) -> tuple[Path, Path]:
     """The PKI (CA 'ca' and a foreign CA 'other'), every identity's password, and the
     deployment with [[site]], [zenoh.auth], [zenoh.tls] for the fusion host and for the
-    site host rx1 (whose router certificate is router-rx1's)."""
+    site host rx1 (whose router certificate is router-rx1's). Every identity runs on the
+    host of certificate 'host' but site-rx2, which runs on 'host-rx2'."""
     make_ca(d, "ca")
     make_ca(d, "other")
-    for name in ("router-fusion", "router-rx1", "host"):
+    for name in ("router-fusion", "router-rx1", "host", "host-rx2"):
         make_cert(d, "ca", name)
     make_cert(d, "other", "intruder")
     text = SCENARIO.read_text()
@@ -437,6 +497,94 @@ def test_only_the_bearing_tracker_answers_history_queries(secure: Secure) -> Non
             assert history_replies(zc(secure, "tma-a1"), "sonar/history/a1/7") == [b"real"]
             assert history_replies(zc(secure, "operator"), "sonar/history/a1/7") == [b"real"]
             assert history_replies(zc(secure, site_identity("rx1")), "sonar/history/a1/7") == []
+        finally:
+            real.undeclare()
+            fake.undeclare()
+
+
+def on_host(s: Secure, identity: str, cn: str) -> ZenohConfig:
+    """A client of the fusion router as ``identity`` (its password) presenting the
+    certificate of common name ``cn`` (a certificate of the deployment's CA)."""
+    z = zc(s, identity)
+    assert z.tls is not None
+    return dataclasses.replace(z, tls=dataclasses.replace(
+        z.tls, cert=str(s.dir / f"{cn}.pem"), key=str(s.dir / f"{cn}.key")))
+
+
+def test_stolen_password_is_useless_with_another_hosts_certificate(secure: Secure) -> None:
+    """Attacker model (a): on host rx2 (its certificate host-rx2, not rx1's key) with
+    site rx1's stolen password: its b1 plots never arrive, while the same certificate
+    with its own identity site-rx2 publishes b2's plots (the end marker)."""
+    listener = Listener(zc(secure, "operator"))
+    try:
+        time.sleep(0.5)
+        put_all(on_host(secure, site_identity("rx1"), "host-rx2"), ["radar/plots/b1/c1"],
+                declared=False)
+        put_all(on_host(secure, site_identity("rx2"), "host-rx2"), ["radar/plots/b2/c1"])
+        keys = listener.until(f"{ROOT}/radar/plots/b2/c1")
+    finally:
+        listener.close()
+    assert keys == [f"{ROOT}/radar/plots/b2/c1"]
+
+
+def router_thief(s: Secure) -> ZenohConfig:
+    """Attacker model (b): a plain client on site rx1's host with router-rx1's password
+    from that host's credentials file and the host's certificate, not the router's."""
+    return on_host(s, router_identity("rx1"), "host")
+
+
+def test_router_password_reads_nothing(secure: Secure) -> None:
+    """The thief subscribes to the whole root: global-fusion's tracks reach the operator,
+    not the thief."""
+    stolen = Inbox()
+    listener = Listener(zc(secure, "operator"))
+    try:
+        with open_session(router_thief(secure)) as thief:
+            thief.declare_subscriber(f"{ROOT}/**", stolen.on_sample)
+            time.sleep(0.5)
+            put_all(zc(secure, "global-fusion"), ["radar/gtracks"])
+            listener.until(f"{ROOT}/radar/gtracks")
+            time.sleep(0.5)
+    finally:
+        listener.close()
+    got = stolen.get(0.1)
+    assert got is None, f"the router's password read {got.key}"
+
+
+def test_router_password_cannot_answer_history_queries(secure: Secure) -> None:
+    """The thief's queryable on array a1's history (a1 is site rx1's) is never asked:
+    tma-a1 gets the bearing tracker's reply only."""
+    with open_session(zc(secure, "bearing-tracker-a1")) as bt, \
+            open_session(router_thief(secure)) as thief:
+        real = bt.declare_queryable(f"{ROOT}/sonar/history/a1/*",
+                                    lambda q: q.reply(q.key_expr, b"real"))
+        fake = thief.declare_queryable(f"{ROOT}/sonar/history/a1/*",
+                                       lambda q: q.reply(q.key_expr, b"forged"))
+        time.sleep(0.5)
+        try:
+            assert history_replies(zc(secure, "tma-a1"), "sonar/history/a1/7") == [b"real"]
+        finally:
+            real.undeclare()
+            fake.undeclare()
+
+
+def alive_keys(z: ZenohConfig) -> list[str]:
+    """The liveliness tokens under root/alive/** that ``z`` sees, sorted."""
+    with open_session(z) as s:
+        return sorted(str(r.ok.key_expr) for r in s.liveliness().get(f"{ROOT}/alive/**",
+                                                                       timeout=5.0) if r.ok)
+
+
+def test_router_password_cannot_declare_liveliness_of_a_stopped_service(secure: Secure) -> None:
+    """The thief declares the token of elementary-tracker-b1 (a site rx1 service, not
+    running): the operator sees global-fusion's token, not the thief's."""
+    with open_session(zc(secure, "global-fusion")) as gf, \
+            open_session(router_thief(secure)) as thief:
+        real = gf.liveliness().declare_token(f"{ROOT}/alive/global_fusion/main")
+        fake = thief.liveliness().declare_token(f"{ROOT}/alive/elementary_tracker/b1")
+        time.sleep(0.5)
+        try:
+            assert alive_keys(zc(secure, "operator")) == [f"{ROOT}/alive/global_fusion/main"]
         finally:
             real.undeclare()
             fake.undeclare()
