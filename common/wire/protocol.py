@@ -151,6 +151,9 @@ TMA_SOLUTION = {
     "constrained": Field("bool"), "bounds": Field("floats", length=6), "bounds_modified": Field("bool"),
     "phase": Field("str", choices=("pre", "post")), "residual_factor": Field("float", nonneg=True),
     "legs": Field("floats"),
+    # added in v1: absent from older publishers and recordings (docs/protocol.md)
+    "converged": Field("bool", optional=True), "ctma_exhausted": Field("bool", optional=True),
+    "range_observable": Field("bool", optional=True),
 }
 TMA = {"v": V, "t": T, "array": ID, "solutions": Field("maps", sub=TMA_SOLUTION)}
 TMA_BOUNDS = {

@@ -77,7 +77,8 @@ def tma_message(r: TmaReport) -> dict[str, Any]:
 
 
 def _solution(track: int, c: CycleOutput) -> dict[str, Any]:
-    """One solution entry: state (m, m/s) and P at c.t, range/course/speed, CTMA status."""
+    """One solution entry: state (m, m/s) and P at c.t, range/course/speed, CTMA status,
+    and the flags of what it does not know (converged, ctma_exhausted, range_observable)."""
     b = c.bounds or MINIMAL_BOUNDS
     return {
         "track": track, "t": c.t, "x": c.x, "y": c.y, "vx": c.vx, "vy": c.vy,
@@ -87,6 +88,7 @@ def _solution(track: int, c: CycleOutput) -> dict[str, Any]:
         "bounds": [b.r_min, b.r_max, b.k_min, b.k_max, b.v_min, b.v_max],
         "bounds_modified": c.bounds_modified, "phase": c.phase,
         "residual_factor": c.residual_factor, "legs": list(c.legs),
+        "converged": c.converged, "ctma_exhausted": c.ctma_exhausted, "range_observable": c.range_observable,
     }
 
 

@@ -458,6 +458,10 @@ def test_tma_five_turns_through_the_processes(tmp_path: Path) -> None:
     sols = [s for s in tma[-1]["solutions"] if _errors(s, truth[int(np.searchsorted(t, s["t"]))])]
     assert sols, "no TMA solution on the contact"
     s = sols[0]
+    # issue 31 s3: every solution carries the flags; the five-turn contact is converged and observable
+    flags = ("converged", "ctma_exhausted", "range_observable")
+    assert all(type(x[f]) is bool for m in tma for x in m["solutions"] for f in flags)
+    assert s["converged"] and s["range_observable"] and not s["ctma_exhausted"]
     k = int(np.searchsorted(t, s["t"]))
     err = math.hypot(s["x"] - x1[k, 0], s["y"] - x1[k, 1])
     bound = position_rms_bound(beta, t, own, load(scn).array("a1").sigma0, 0.0, float(s["t"]))

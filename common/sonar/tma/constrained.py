@@ -133,7 +133,11 @@ class CycleOutput:
     """One processing cycle's target data at time ``t`` (current = latest bearing).
 
     ``residual_factor`` is 1.0 when the TMA solution was inside the bounds (CTMA = TMA).
-    ``legs`` are the manoeuvre times in use.
+    ``legs`` are the manoeuvre times in use. ``converged``: the solve of this solution met
+    its stop rule (TMA: 002 claim 17 within ``max_iter``; CTMA: the solver's tolerance,
+    not its evaluation cap). ``ctma_exhausted``: a CTMA solution whose error (003 Fig. 4-5)
+    remained after ``max_corrections`` corrections and the minimal-bounds fall-back.
+    ``range_observable``: :func:`range_observable`.
     """
 
     t: float
@@ -152,6 +156,26 @@ class CycleOutput:
     residual_factor: float
     legs: tuple[float, ...]
     roc: float
+    converged: bool
+    ctma_exhausted: bool
+    range_observable: bool
+
+
+RANGE_SIGMA_RATIO = 0.5
+
+
+def range_observable(x: np.ndarray, P: np.ndarray, own_c: np.ndarray) -> bool:
+    """Range observable from the bearings: sigma_R <= 0.5 R, with sigma_R^2 = g P g' the
+    variance of the range R of x (x, y, vx, vy) from own_c under its covariance P
+    ((H'WH)^-1 of 002 eq. 7-8), g = dR/dx. Bearings alone fix the range only after an
+    own-ship manoeuvre (or with a range support value, 002 claims 3-10); without one
+    sigma_R is orders of magnitude above R.
+    """
+    d = np.asarray(x[:2], float) - own_c
+    r = float(np.hypot(d[0], d[1]))
+    g = np.concatenate((d / max(r, 1e-300), (0.0, 0.0)))[None, :]
+    sigma = float(np.sqrt((g @ P @ g.T)[0, 0]))
+    return bool(sigma <= RANGE_SIGMA_RATIO * r)
 
 
 class TmaTracker:
@@ -241,11 +265,11 @@ class TmaTracker:
         return self.tma
 
     def _output(self, sol: TmaSolution, tc: float, oc: np.ndarray, constrained: bool, modified: bool,
-                phase: str, q: float) -> CycleOutput:
+                phase: str, q: float, exhausted: bool = False) -> CycleOutput:
         x, P = sol.state_at(tc)
         r, k, v = rkv(x, oc)
         return CycleOutput(tc, *map(float, x), P, r, k, v, constrained, self.bounds, modified, phase, q,
-                           self.legs, self.detector.roc)
+                           self.legs, self.detector.roc, sol.converged, exhausted, range_observable(x, P, oc))
 
     def _inside(self, tma: TmaSolution, rkv_t: tuple[float, float, float]) -> bool:
         """The TMA solution lies in the bounds of every leg (003 claims 2b and 9)."""
@@ -260,7 +284,7 @@ class TmaTracker:
             self.q_hist.append(1.0)
             self.edge_streak[:] = 0
             return self._output(tma, tc, oc, False, False, phase, 1.0)
-        modified = False
+        modified = exhausted = False
         z = 0
         data = (self.t, self.brg, self.sbrg, self.own, self.t0)
         while True:
@@ -288,6 +312,7 @@ class TmaTracker:
                         self.edge_streak[:] = 0
                         return self._output(tma, tc, oc, False, True, phase, 1.0)
                     continue
+                exhausted = True
                 break
             to_fix = flags.any(axis=0) if flags.any() else self.bounds.violations(*rkv_t)
             self.bounds = recentre(self.bounds, to_fix, r, k, v)
@@ -299,4 +324,4 @@ class TmaTracker:
                 return self._output(tma, tc, oc, False, True, phase, 1.0)
         self.q_hist.append(q)
         self.edge_streak = streak
-        return self._output(ctma, tc, oc, True, modified, phase, q)
+        return self._output(ctma, tc, oc, True, modified, phase, q, exhausted)
