@@ -6,6 +6,7 @@ whole feet); aircraft left out of the snapshots make their tracks unverified."""
 from __future__ import annotations
 
 import json
+import re
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -13,6 +14,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from common.bus.recording import RecordWriter
+from common.cli import main as cli_main
 from common.deploy.config import load
 from common.evaluation.adsb import AdsbScoring, AdsbTruth, parse_snapshot
 from common.evaluation.metrics import count_switches
@@ -86,3 +89,25 @@ def test_tracks_on_aircraft_without_adsb_are_unverified(run: Any) -> None:
                  and np.linalg.norm(np.array(k["x"])[::2] - one) > 5e3}
     assert on_2 and on_2 <= adsb.unverified
     assert adsb.ev.metrics.summary().false == pytest.approx(0.0)
+
+
+def test_evaluate_truth_adsb_on_a_recording_prints_the_simulator_truth_scores(
+        run: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    gtracks, truth, snaps = run
+    for k, s in enumerate(snaps):
+        (tmp_path / f"aircraft-{k:06d}.json").write_text(s)
+    with (tmp_path / "run.pfrec").open("wb") as f:
+        rec = RecordWriter(f, "pf/v1", 0.0)
+        for g in gtracks:
+            rec.write("pf/v1/radar/gtracks", g["t"], protocol.encode(g))
+    sim = Evaluation()
+    for g in gtracks:
+        sim.add(g["t"], np.asarray(truth[g["t"]]["id"]), truth_state(truth[g["t"]]), *confirmed_tracks(g))
+    code = cli_main(["evaluate", "--config", str(SCENARIO), "--truth-adsb", str(tmp_path),
+                     "--tracks", str(tmp_path / "run.pfrec")])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    gospa = float(re.search(r"mean GOSPA (\S+) m", out).group(1))  # type: ignore[union-attr]
+    assert gospa == pytest.approx(sim.metrics.summary().mean_gospa, abs=0.5)
+    assert "unverified (no ADS-B aircraft within the cutoff, not scored): 0 tracks" in out
+    assert "000001" in out and "000002" in out  # the RMSE rows named by address
