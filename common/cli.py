@@ -38,6 +38,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
     "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
     "view": ("services.view.main", "live operator view in a browser: tracks, sonar, services"),
+    "export": ("services.export.main", "global tracks of a recording or live as GeoJSON for map tools"),
 }
 
 
@@ -62,6 +63,8 @@ EXAMPLES: dict[str, str] = {
     "evaluate": "pfusion evaluate --config scenarios/two_targets.toml",
     "acl": "pfusion acl --config scenarios/two_targets.toml",
     "view": "pfusion view --config scenarios/two_targets.toml --port 8080",
+    "export": "pfusion export --config scenarios/geodetic_two_targets.toml --recording run.pfrec "
+              "--geojson tracks.geojson",
 }
 
 

@@ -4,13 +4,17 @@ in scenario time, as fast as possible or at ``--speed`` times real time.
 ``--repeat K --gap G`` publishes K seeded runs back to back (for swap statistics): run i
 uses seed + i and times shifted by i * (duration + G); each run is followed by G seconds
 of scans of the same scenario without targets (clutter only), in which trackers delete
-the run's tracks. Truth ids are the scenario's in every run; sequence numbers go on."""
+the run's tracks. Truth ids are the scenario's in every run; sequence numbers go on.
+
+``--adsb-out DIR`` also writes the radar truth as readsb aircraft.json snapshots, one
+file a scan (common.wire.adsb_snapshot), for ``pfusion evaluate --truth-adsb``."""
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import itertools
+import json
 import logging
 import time
 import tomllib
@@ -22,6 +26,7 @@ from common.bus.transport import Publisher, linger, open_session, stop_on_signal
 from common.cli import add_common, load_config
 from common.sim.simulator import load_scenario
 from common.wire import protocol
+from common.wire.adsb_snapshot import aircraft_json
 from common.wire.sim_messages import repeated
 
 log = logging.getLogger("simulate")
@@ -44,6 +49,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gap", type=float, default=0.0, metavar="SECONDS",
                    help="with --repeat: target-free scans (clutter only) after each run, so "
                         "that trackers delete the run's tracks")
+    p.add_argument("--adsb-out", metavar="DIR", default=None,
+                   help="also write the radar truth as aircraft.json snapshots to DIR "
+                        "(geodetic deployments)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -57,6 +65,12 @@ def main(args: argparse.Namespace) -> int:
     if args.repeat < 1 or args.gap < 0:
         log.error("--repeat must be >= 1 and --gap >= 0")
         return 2
+    if args.adsb_out and cfg.origin is None:
+        log.error("--adsb-out needs a geodetic deployment ([radar.origin])")
+        return 2
+    adsb = Path(args.adsb_out) if args.adsb_out else None
+    if adsb is not None:
+        adsb.mkdir(parents=True, exist_ok=True)
     if args.scans:
         period = min(s.scan_period for s in (scn.radar, scn.sonar) if s is not None)
         scn = dataclasses.replace(scn, duration=max(scn.duration, args.scans * period))
@@ -87,6 +101,8 @@ def main(args: argparse.Namespace) -> int:
                     pubs[suffix] = Publisher(session, f"{root}/{suffix}")
                 pubs[suffix].put(protocol.encode(msg))
                 published += 1
+                if adsb is not None and cfg.origin is not None and suffix == "sim/truth/radar":
+                    (adsb / f"aircraft-{scans:06d}.json").write_text(json.dumps(aircraft_json(msg, cfg.origin)))
             scans += 1
         status = {"v": protocol.VERSION, "t": float(t), "state": "done",
                   "scans": scans, "published": published}

@@ -6,6 +6,11 @@ coalesced stream of it over a WebSocket (services/view/server.py). The Zenoh cal
 only append to an inbox and wake the event loop. Liveliness and counters are read as
 ``pfusion status`` reads them (common.bus.liveliness: ``alive``, ``take``).
 
+``/tracks.geojson`` serves the model's global tracks as RFC 7946 GeoJSON
+(common.wire.geojson) for map tools (QGIS: a vector layer on that URL, refreshed). The
+page's catch-all ``/{name}`` route of server.py comes first in the router, so this
+route is a middleware here.
+
 Why aiohttp: one well-kept asyncio library that serves both HTTP and WebSockets, with
 back-pressure on a WebSocket's writes; the standard library has no WebSocket server.
 """
@@ -14,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import logging
 import signal
 import sys
@@ -26,11 +32,13 @@ from common.bus.liveliness import alive, take
 from common.bus.transport import Envelope, Inbox, open_session
 from common.cli import add_common, load_config
 from common.wire import protocol
+from common.wire.geojson import collection, site_features, track_features, view_shapes
 from common.wire.view_model import ViewModel
 from services.view.server import Hub, app
 
 ALIVE_PERIOD_S = 1.0
 LATEST_ONLY = {"gtracks", "etracks", "truth_radar", "tma", "truth_sonar"}
+GEOJSON_PATH = "/tracks.geojson"
 KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sonar/detections/*",
         "sonar/btracks/*", "sonar/tma/*")
 log = logging.getLogger("view")
@@ -108,6 +116,33 @@ class Feed:
             s.undeclare()
 
 
+def tracks_geojson(model: ViewModel) -> dict[str, Any] | None:
+    """The sites and global tracks of the model as a FeatureCollection (None: the
+    deployment has no [radar.origin])."""
+    origin = model.cfg.origin
+    if origin is None:
+        return None
+    topic = model.topics.get("gtracks")
+    state = topic.state if topic is not None else {"t": 0.0, "tracks": []}
+    return collection(site_features(model.cfg, origin) + track_features(view_shapes(state), origin))
+
+
+def geojson_route(model: ViewModel) -> Any:
+    """The middleware that answers GET GEOJSON_PATH."""
+
+    @web.middleware
+    async def route(request: web.Request, handler: Any) -> web.StreamResponse:
+        if request.path != GEOJSON_PATH or request.method != "GET":
+            return await handler(request)
+        doc = tracks_geojson(model)
+        if doc is None:
+            raise web.HTTPNotFound(text="no [radar.origin] in the deployment: no geographic positions")
+        return web.Response(text=json.dumps(doc, separators=(",", ":")), content_type="application/geo+json",
+                            headers={"Cache-Control": "no-cache"})
+
+    return route
+
+
 async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewModel, root: str) -> int:
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -115,7 +150,9 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
         loop.add_signal_handler(sig, stop.set)
     hub = Hub(model)
     feed = Feed(session, hub, root, loop)  # subscribed before the page can be reached
-    runner = web.AppRunner(app(hub), access_log=None, shutdown_timeout=2.0)
+    application = app(hub)
+    application.middlewares.append(geojson_route(model))
+    runner = web.AppRunner(application, access_log=None, shutdown_timeout=2.0)
     await runner.setup()
     site = web.TCPSite(runner, args.host, args.port)
     try:

@@ -46,6 +46,7 @@ ARGS = {
     "global-fusion": f"--config {TWO}",
     "evaluate": f"--config {TWO}",
     "view": f"--config {TWO} --port 0",
+    "export": "--config scenarios/geodetic_two_targets.toml --geojson {tmp}/out.geojson --seconds 1",
 }
 
 
