@@ -38,6 +38,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "evaluate": ("services.evaluate.main", "GOSPA/OSPA, switches, breaks, NEES and PCRLB of global tracks vs truth"),
     "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
     "view": ("services.view.main", "live operator view in a browser: tracks, sonar, services"),
+    "ingest": ("services.ingest.main", "plots of external nodes: a blah2 node's HTTP API, or a CSV file"),
 }
 
 
@@ -62,6 +63,7 @@ EXAMPLES: dict[str, str] = {
     "evaluate": "pfusion evaluate --config scenarios/two_targets.toml",
     "acl": "pfusion acl --config scenarios/two_targets.toml",
     "view": "pfusion view --config scenarios/two_targets.toml --port 8080",
+    "ingest": "pfusion ingest blah2 --config scenarios/network_rd.toml --base r1fm1 --url http://127.0.0.1:3000",
 }
 
 

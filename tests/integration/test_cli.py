@@ -46,6 +46,7 @@ ARGS = {
     "global-fusion": f"--config {TWO}",
     "evaluate": f"--config {TWO}",
     "view": f"--config {TWO} --port 0",
+    "ingest": f"csv {{tmp}}/in.pfrec --config {TWO}",
 }
 
 
