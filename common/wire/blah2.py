@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -165,6 +166,11 @@ def parse_config(body: bytes | str) -> NodeConfig:
     return NodeConfig(site("rx"), site("tx"), _number(doc, "capture.fc"), _number(doc, "capture.fs"), cpi)
 
 
+def _geo(p: Iterable[float]) -> str:
+    lat, lon, alt = p
+    return f"[{lat:.6f}, {lon:.6f}, {alt:.1f}]"
+
+
 def mismatches(node: NodeConfig, base: RadarBase, origin: LocalFrame, fc: float, fs: float) -> list[str]:
     """Every disagreement of a node's config with its base in the deployment (sites
     within SITE_TOL_M, fc and fs within FREQ_TOL_HZ when the deployment gives them), each
@@ -174,8 +180,8 @@ def mismatches(node: NodeConfig, base: RadarBase, origin: LocalFrame, fc: float,
         there = origin.to_enu(*getattr(node, k))
         d = float(np.linalg.norm(there - here))
         if d > SITE_TOL_M:
-            lat, lon, alt = (float(v) for v in origin.to_geodetic(here))
-            out.append(f"{k}: node {list(getattr(node, k))}, deployment [{lat:.6f}, {lon:.6f}, {alt:.1f}] "
+            site = [float(v) for v in origin.to_geodetic(here)]
+            out.append(f"{k}: node {_geo(getattr(node, k))}, deployment {_geo(site)} "
                        f"({d:.0f} m apart, tolerance {SITE_TOL_M:g} m)")
     for k, mine in (("fc", fc), ("fs", fs)):
         theirs = getattr(node, k)
