@@ -120,7 +120,7 @@ def test_mismatch_file_and_csv(tmp_path: Path) -> None:
         d.drain()
         assert len(d.of("radar/plots/r2dvbt2/dvbt2")) == 20
         got = d.of("radar/plots/r1dvbt2/dvbt3")
-        assert [(m["t"], m["rb"]) for m in got] == [(1.0, [50000.0, 60000.0]), (3.0, [50000.0])]
+        assert [(m["t"], list(m["rb"])) for m in got] == [(1.0, [50000.0, 60000.0]), (3.0, [50000.0])]
         assert "'nan': 1" in (tmp_path / "ingest-csv.log").read_text()
         assert "'time_backwards': 1" in (tmp_path / "ingest-csv.log").read_text()
         assert "'fields': 1" in (tmp_path / "ingest-file.log").read_text()
