@@ -84,7 +84,13 @@ def main(args: argparse.Namespace) -> int:
         svc.publish(key, msg)
 
     def on_config(_: str, body: bytes) -> None:
-        node = blah2.parse_config(body)
+        try:
+            node = blah2.parse_config(body)
+        except Rejected as e:
+            svc.log.error("node %s: %s", args.url, e.detail)
+            code[0] = 2
+            svc.stop()
+            return
         assert cfg.origin is not None
         bad = blah2.mismatches(node, base, cfg.origin, feed.units.params.fc, feed.units.params.fs)
         if bad:
