@@ -39,6 +39,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "acl": ("services.acl.main", "print the Zenoh access control generated from a deployment"),
     "view": ("services.view.main", "live operator view in a browser: tracks, sonar, services"),
     "export": ("services.export.main", "global tracks of a recording or live as GeoJSON for map tools"),
+    "ingest": ("services.ingest.main", "plots of external nodes: a blah2 node's HTTP API, or a CSV file"),
 }
 
 
@@ -65,6 +66,7 @@ EXAMPLES: dict[str, str] = {
     "view": "pfusion view --config scenarios/two_targets.toml --port 8080",
     "export": "pfusion export --config scenarios/geodetic_two_targets.toml --recording run.pfrec "
               "--geojson tracks.geojson",
+    "ingest": "pfusion ingest blah2 --config scenarios/network_rd.toml --base r1fm1 --url http://127.0.0.1:3000",
 }
 
 

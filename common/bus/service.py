@@ -24,6 +24,7 @@ import zenoh
 
 from common.bus.transport import (
     LOG_EVERY,
+    Envelope,
     Inbox,
     LossCount,
     Publisher,
@@ -74,6 +75,14 @@ class Service:
         ke = zenoh.KeyExpr(self.key(suffix))
         self._routes.append((ke, handler))
         self._entities.append(self.session.declare_subscriber(ke, self.inbox.on_sample))
+
+    def local(self, suffix: str, handler: Handler) -> Callable[[bytes], None]:
+        """Route items put by the returned function (from any thread, e.g. a poller's)
+        to ``handler(key, payload)`` on the loop, as samples of root/suffix: counted
+        and rejected alike, never published."""
+        ke = zenoh.KeyExpr(self.key(suffix))
+        self._routes.append((ke, handler))
+        return lambda payload: self.inbox.put(Envelope(str(ke), payload))
 
     def serve(self, suffix: str, handler: QueryHandler) -> None:
         """Answer queries on root/suffix from the loop (handler calls query.reply)."""

@@ -16,6 +16,7 @@ from common.deploy.structure import ARRAY, BASE, ORIGIN, ZENOH, Table
 from common.radar.elementary.tracker import ElementaryParams, RadarCrossingParams
 from common.radar.fusion.params import FusionParams
 from common.radar.plots.channel_fusion import PlotterParams
+from common.radar.plots.units import IngestParams
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
 from common.sonar.tma.constrained import CtmaParams
 from common.sonar.tma.manager import BoundsParams, SupportParams, TmaParams
@@ -26,6 +27,8 @@ SECTIONS: dict[str, type] = {
     "radar.crossing": RadarCrossingParams,
     "radar.fusion": FusionParams,
     "radar.fusion_crossing": CrossingParams,
+    "radar.ingest": IngestParams,
+    "radar.ingest.*": IngestParams,
     "sonar.tracker": SonarTrackerParams,
     "sonar.tracker.mht": MhtParams,
     "sonar.crossing": CrossingParams,
@@ -57,12 +60,23 @@ def check_all(cfg: Config) -> None:
     for k, v in table(cfg.doc, "sonar.tma.bounds").items():
         if isinstance(v, dict):
             array_bounds(cfg, k)
+    for k, v in table(cfg.doc, "radar.ingest").items():
+        if isinstance(v, dict):
+            cfg.base(k)
+            base_ingest(cfg, k)
 
 
 def array_bounds(cfg: Config, array: str) -> BoundsParams:
     """[sonar.tma.bounds] overridden key by key by [sonar.tma.bounds.<array>]."""
     merged = {**table(cfg.doc, "sonar.tma.bounds"), **table(cfg.doc, f"sonar.tma.bounds.{array}")}
     return section(cfg, f"sonar.tma.bounds.{array}", BoundsParams,
+                   {k: v for k, v in merged.items() if not isinstance(v, dict)})
+
+
+def base_ingest(cfg: Config, base: str) -> IngestParams:
+    """[radar.ingest] overridden key by key by [radar.ingest.<base>]."""
+    merged = {**table(cfg.doc, "radar.ingest"), **table(cfg.doc, f"radar.ingest.{base}")}
+    return section(cfg, f"radar.ingest.{base}", IngestParams,
                    {k: v for k, v in merged.items() if not isinstance(v, dict)})
 
 

@@ -47,6 +47,7 @@ ARGS = {
     "evaluate": f"--config {TWO}",
     "view": f"--config {TWO} --port 0",
     "export": "--config scenarios/geodetic_two_targets.toml --geojson {tmp}/out.geojson --seconds 1",
+    "ingest": f"csv {{tmp}}/in.pfrec --config {TWO}",
 }
 
 

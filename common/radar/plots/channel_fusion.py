@@ -32,6 +32,7 @@ from common.core.angles import wrap_2pi, wrap_pi
 from common.core.gating import overlap_pairs
 from common.core.params import Params, Range, positive
 from common.core.rejection import Rejected
+from common.radar.plots.stamps import ahead_rule
 
 COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz")
 
@@ -300,12 +301,7 @@ class PlotFusion:
         others = [v for c, v in self._last.items() if c != channel and v > -np.inf and c not in self._unanchored]
         own = self._last[channel]
         ref = max(others) if others else (own if own > -np.inf and channel not in self._unanchored else None)
-        if ref is not None and t > ref + lim:
-            agree = [c for c, a in self._ahead.items() if abs(a - t) <= lim and (c != channel or n == 1)]
-            self._ahead[channel] = t
-            if not agree or len(agree) + 1 <= n / 2:
-                raise Rejected("ahead", f"channel {channel}: t={t} more than {lim} s ahead of t={ref}")
-            self._ahead.clear()  # a majority agrees: the base's clock jumped
+        ahead_rule(self._ahead, f"channel {channel}", t, ref, lim, n)
         for c in sorted(self._unanchored):
             if self._last[c] > t + lim:
                 self._evict(c)
