@@ -9,8 +9,12 @@ global tracks (the samples never reach a subscriber, while its own base's plots 
 also through a site router; the read roles cannot publish; a stolen password does nothing
 with the certificate of a host that does not run its identity, and a site router's
 password does nothing without the router's certificate (no reads, no forged history
-replies, no liveliness of a stopped service: issue 33); the radar chain of
-two_targets.toml with all of it on gives the global tracks of the in-process chain."""
+replies, no liveliness of a stopped service: issue 33); the read roles see only their
+scope (a viewer tracks and status, an analyst everything), only operator-tma sets TMA
+bounds, ``pfusion run`` on a site host runs with the site's identity and credentials;
+a certificate expiring within 7 days is warned about, an expired one refused (exit 2);
+the radar chain of two_targets.toml with all of it on gives the global tracks of the
+in-process chain."""
 
 from __future__ import annotations
 
