@@ -21,6 +21,7 @@ from typing import Any
 import msgpack
 import zenoh
 
+from common.bus.certs import check_validity
 from common.core.sequence import SequenceCheck
 from common.deploy.config import ConfigError, ZenohConfig
 
@@ -66,7 +67,8 @@ def zenoh_config(
 
 def _secure(c: zenoh.Config, zc: ZenohConfig, mode: str, connects: bool) -> None:
     """TLS: root CA, a router's listening certificate, the certificate presented under
-    mutual TLS. Auth: a router's dictionary of identities, this identity's password."""
+    mutual TLS (refused when expired, common.bus.certs). Auth: a router's dictionary of
+    identities, this identity's password."""
     router = mode == "router"
     if zc.tls is not None:
         t = zc.tls
@@ -77,7 +79,8 @@ def _secure(c: zenoh.Config, zc: ZenohConfig, mode: str, connects: bool) -> None
         present = t.mtls and (connects or not router)
         if router or present:
             (cert_path, cert_name), (key_path, key_name) = mine
-            cert = _existing(cert_path, f"zenoh.tls.{cert_name}")
+            cert = check_validity(_existing(cert_path, f"zenoh.tls.{cert_name}"),
+                                  f"zenoh.tls.{cert_name}")
             key = _secret(key_path, f"zenoh.tls.{key_name}")
             if router:
                 tls |= {"listen_certificate": cert, "listen_private_key": key}

@@ -5,8 +5,9 @@ its command and its --base / --array (:func:`identity_of`). :func:`grants` says 
 each identity of a deployment may do, and :func:`access_control` turns that into the
 ``access_control`` section of a Zenoh 1.x router (deny by default): a receiver site
 publishes only its bases' plots and its arrays' detections, a service only its output,
-metrics and liveliness keys, the operator only reads, and only ``global-fusion``
-publishes ``radar/gtracks``. Flows are seen from the router: *ingress* is what a client
+metrics and liveliness keys, the read roles ``viewer`` (tracks and status) and
+``analyst`` (everything) only read, ``operator-tma`` only sets TMA bounds and support,
+and only ``global-fusion`` publishes ``radar/gtracks``. Flows are seen from the router: *ingress* is what a client
 sends to it, *egress* what it sends to a client.
 
 Under mutual TLS each identity is also bound to certificates: a subject with both
@@ -33,14 +34,18 @@ import zenoh
 from common.deploy.config import Config, ConfigError
 from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, token_name
 
-OPERATOR = "operator"
+VIEWER = "viewer"
+ANALYST = "analyst"
+OPERATOR_TMA = "operator-tma"
+ROLES = (VIEWER, ANALYST, OPERATOR_TMA)
 SIMULATOR = "simulator"
-SUPERVISOR = "supervisor"
 EVALUATE = "evaluate"
 ROUTER_FUSION = "router-fusion"
-OPERATOR_TOOLS = ("watch", "record", "status", "demo", "run", "view", "export")
+VIEWER_TOOLS = ("status", "run", "export")  # tracks, liveliness and metrics are enough
+ANALYST_TOOLS = ("watch", "record", "demo", "view")  # any key: plots, etracks, truth
 TEST_FEEDS = ("simulate", "replay")
-OPERATOR_TOKENS = ("alive/record/*", "alive/demo/*")
+ANALYST_TOKENS = ("alive/record/*", "alive/demo/*")
+VIEWER_READS = ("radar/gtracks", "sonar/btracks/*", "sonar/tma/*", "metrics/**")
 ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
                 "liveliness_token", "declare_liveliness_subscriber", "liveliness_query"]
 
@@ -73,8 +78,10 @@ def identity_of(command: str, base: str | None = None, array: str | None = None)
         return command
     if command in TEST_FEEDS:
         return SIMULATOR
-    if command in OPERATOR_TOOLS:
-        return OPERATOR
+    if command in VIEWER_TOOLS:
+        return VIEWER
+    if command in ANALYST_TOOLS:
+        return ANALYST
     return None
 
 
@@ -118,9 +125,10 @@ def grants(cfg: Config) -> dict[str, Grant]:
             [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}",
              f"sonar/tma/support/{a.id}"])
         tma.query = [f"sonar/history/{a.id}/*"]
-    g[OPERATOR] = Grant(subscribe=["**"], query=["**"], tokens=list(OPERATOR_TOKENS),
-                        watch_alive=True)
-    g[SUPERVISOR] = Grant(publish=["sonar/tma/bounds/*", "sonar/tma/support/*"])
+    g[VIEWER] = Grant(subscribe=list(VIEWER_READS), watch_alive=True)
+    g[ANALYST] = Grant(subscribe=["**"], query=["**"], tokens=list(ANALYST_TOKENS),
+                       watch_alive=True)
+    g[OPERATOR_TMA] = Grant(publish=["sonar/tma/bounds/*", "sonar/tma/support/*"])
     g[SIMULATOR] = Grant(publish=["radar/plots/**", "sonar/detections/**", "sim/**"],
                          tokens=["alive/simulate/*"], watch_alive=True)
     return g
@@ -128,9 +136,9 @@ def grants(cfg: Config) -> dict[str, Grant]:
 
 def site_members(cfg: Config, site_id: str) -> list[str]:
     """Identities whose traffic a site's router forwards: the site's feed, the services
-    of its bases and arrays, and the operator's tools."""
+    of its bases and arrays, and the roles (an operator may work at any site)."""
     s = next(s for s in cfg.sites if s.id == site_id)
-    out = [site_identity(s.id), OPERATOR]
+    out = [site_identity(s.id), *ROLES]
     out += [f"{c}-{b}" for b in s.bases for c in PER_BASE]
     out += [f"{c}-{a}" for a in s.arrays for c in PER_ARRAY]
     return out

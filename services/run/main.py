@@ -9,6 +9,11 @@ without importing anything again), each in its own session (Ctrl-C reaches only
 router (``router_endpoint``: the first --connect, else ``[zenoh] connect``, by default
 ``tcp/127.0.0.1:7447``) and fails with one line and code 2 when it cannot listen there.
 Without it, ``run`` first checks that a router answers (else one line, code 2).
+
+Under [zenoh.auth] ``run`` itself logs in as ``viewer`` (its router check and the
+metrics of ``--exit-after-sim``), or as ``--identity``: on a site host, the site's
+identity (``site-<site>``), so that the host needs no password of a read role; each
+child logs in with its own identity (docs/security.md).
 """
 
 from __future__ import annotations

@@ -142,9 +142,9 @@ def test_security_tables_and_sites(tmp_path: Path) -> None:
     assert cfg.zenoh.tls.root_ca == str(tmp_path / "pki/ca.pem") and cfg.zenoh.tls.cert == ""
     assert cfg.zenoh.tls.hosts == {}
     hosts = load(write(tmp_path, SECURE.replace("mtls = true", 'mtls = true\n[zenoh.tls.hosts]\n'
-                                                 'host-rx1 = ["site-rx1", "operator"]')))
+                                                 'host-rx1 = ["site-rx1", "viewer"]')))
     assert hosts.zenoh.tls is not None
-    assert hosts.zenoh.tls.hosts == {"host-rx1": ["site-rx1", "operator"]}
+    assert hosts.zenoh.tls.hosts == {"host-rx1": ["site-rx1", "viewer"]}
     assert [(s.id, s.bases, s.arrays) for s in cfg.sites] == [("rx1", ["b1"], ["a1"])]
     plain = load(write(tmp_path, GOOD))
     assert plain.zenoh.auth is None and plain.zenoh.tls is None

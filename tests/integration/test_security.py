@@ -6,11 +6,15 @@ generated from the deployment (common.deploy.acl).
 Shown: a client without credentials, with a wrong password, or with a certificate of
 another CA cannot connect; a site's identity cannot publish another base's plots nor
 global tracks (the samples never reach a subscriber, while its own base's plots do),
-also through a site router; the operator cannot publish; a stolen password does nothing
+also through a site router; the read roles cannot publish; a stolen password does nothing
 with the certificate of a host that does not run its identity, and a site router's
 password does nothing without the router's certificate (no reads, no forged history
-replies, no liveliness of a stopped service: issue 33); the radar chain of
-two_targets.toml with all of it on gives the global tracks of the in-process chain."""
+replies, no liveliness of a stopped service: issue 33); the read roles see only their
+scope (a viewer tracks and status, an analyst everything), only operator-tma sets TMA
+bounds, ``pfusion run`` on a site host runs with the site's identity and credentials;
+a certificate expiring within 7 days is warned about, an expired one refused (exit 2);
+the radar chain of two_targets.toml with all of it on gives the global tracks of the
+in-process chain."""
 
 from __future__ import annotations
 
@@ -81,8 +85,8 @@ mtls = true
 [zenoh.tls.hosts]
 host = ["site-rx1", "channel-plotter-b1", "elementary-tracker-b1", "channel-plotter-b2",
         "elementary-tracker-b2", "channel-plotter-b3", "elementary-tracker-b3",
-        "bearing-tracker-a1", "tma-a1", "global-fusion", "evaluate", "operator",
-        "supervisor", "simulator"]
+        "bearing-tracker-a1", "tma-a1", "global-fusion", "evaluate", "analyst",
+        "viewer", "operator-tma", "simulator"]
 host-rx2 = ["site-rx2"]
 """
 
@@ -98,13 +102,30 @@ def make_ca(d: Path, name: str) -> None:
             "-subj", f"/CN={name}", cwd=d)
 
 
-def make_cert(d: Path, ca: str, name: str) -> None:
-    """<name>.pem / .key signed by CA <ca>, common name <name>, valid for 127.0.0.1."""
+def make_cert(d: Path, ca: str, name: str, days: int = 30) -> None:
+    """<name>.pem / .key signed by CA <ca>, common name <name>, valid for 127.0.0.1 from
+    now for ``days`` days (30: the documented default)."""
     openssl("req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes",
             "-keyout", f"{name}.key", "-out", f"{name}.csr", "-subj", f"/CN={name}", cwd=d)
     (d / "san.cnf").write_text("subjectAltName=IP:127.0.0.1,DNS:localhost\n")
     openssl("x509", "-req", "-in", f"{name}.csr", "-CA", f"{ca}.pem", "-CAkey", f"{ca}.key",
-            "-CAcreateserial", "-out", f"{name}.pem", "-days", "2", "-extfile", "san.cnf", cwd=d)
+            "-CAcreateserial", "-out", f"{name}.pem", "-days", str(days), "-extfile", "san.cnf",
+            cwd=d)
+
+
+def make_expired_cert(d: Path, ca: str, name: str) -> None:
+    """<name>.pem / .key signed by CA <ca>, valid on 1 and 2 January 2026 only (``openssl
+    ca`` sets past dates, ``x509 -days`` cannot)."""
+    openssl("req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes",
+            "-keyout", f"{name}.key", "-out", f"{name}.csr", "-subj", f"/CN={name}", cwd=d)
+    (d / "index.txt").write_text("")
+    (d / "serial").write_text("01\n")
+    (d / "ca.cnf").write_text("[ca]\ndefault_ca = d\n[d]\ndatabase = index.txt\n"
+                              "new_certs_dir = .\nserial = serial\ndefault_md = sha256\n"
+                              "policy = p\n[p]\ncommonName = supplied\n")
+    openssl("ca", "-batch", "-config", "ca.cnf", "-cert", f"{ca}.pem", "-keyfile", f"{ca}.key",
+            "-in", f"{name}.csr", "-out", f"{name}.pem", "-notext",
+            "-startdate", "20260101000000Z", "-enddate", "20260102000000Z", cwd=d)
 
 
 MIXED = """
@@ -152,7 +173,7 @@ def allowed(acl: dict, user: str, flow: str, message: str, key: str) -> bool:
 def test_generated_access_control(tmp_path: Path) -> None:
     """Deny by default; each site publishes its own bases' plots and arrays' detections
     only; only global-fusion publishes global tracks; each service publishes exactly
-    its outputs and metrics and declares its own token; the operator never publishes."""
+    its outputs and metrics and declares its own token; the read roles never publish."""
     (tmp_path / "d.toml").write_text(MIXED)
     cfg = load(tmp_path / "d.toml")
     acl = access_control(cfg)
@@ -167,14 +188,19 @@ def test_generated_access_control(tmp_path: Path) -> None:
     assert put["elementary-tracker-b2"] == {"radar/etracks/b2", "metrics/elementary_tracker/b2"}
     assert put["bearing-tracker-a1"] == {"sonar/btracks/a1", "metrics/bearing_tracker/a1"}
     assert put["tma-a2"] == {"sonar/tma/a2", "metrics/tma/a2"}
-    assert put["operator"] == set() and put["supervisor"] == {"sonar/tma/bounds/a1",
-                                                              "sonar/tma/bounds/a2"}
+    assert put["analyst"] == put["viewer"] == set()
+    assert put["operator-tma"] == {"sonar/tma/bounds/a1", "sonar/tma/bounds/a2"}
     assert put["router-north"] == put["site-north"] | put["channel-plotter-b1"] \
-        | put["elementary-tracker-b1"] | put["bearing-tracker-a1"] | put["tma-a1"]
+        | put["elementary-tracker-b1"] | put["bearing-tracker-a1"] | put["tma-a1"] \
+        | put["operator-tma"]
+    get = {u: {k for k in KEYS if allowed(acl, u, "egress", "put", f"{ROOT}/{k}")} for u in users}
+    assert get["viewer"] == {"radar/gtracks", "sonar/btracks/a1", "sonar/btracks/a2",
+                             "sonar/tma/a1", "sonar/tma/a2", *(k for k in KEYS if "metrics" in k)}
+    assert get["analyst"] == set(KEYS) and get["operator-tma"] == set()
     for u, svc, inst in (("tma-a1", "tma", "a1"), ("global-fusion", "global_fusion", "main")):
         assert allowed(acl, u, "ingress", "liveliness_token", f"{ROOT}/alive/{svc}/{inst}")
         assert not allowed(acl, u, "ingress", "liveliness_token", f"{ROOT}/alive/tma/a2")
-    assert allowed(acl, "operator", "ingress", "declare_subscriber", f"{ROOT}/**")
+    assert allowed(acl, "analyst", "ingress", "declare_subscriber", f"{ROOT}/**")
     assert allowed(acl, "tma-a1", "ingress", "query", f"{ROOT}/sonar/history/a1/3")
     assert not allowed(acl, "tma-a1", "ingress", "query", f"{ROOT}/sonar/history/a2/3")
     assert all(s.get("usernames") == [s["id"]] for s in acl["subjects"])  # no mTLS here
@@ -186,8 +212,8 @@ root_ca = "ca.pem"
 mtls = true
 
 [zenoh.tls.hosts]
-host-north = ["site-north", "channel-plotter-b1", "elementary-tracker-b1", "operator"]
-host-fusion = ["global-fusion", "operator"]
+host-north = ["site-north", "channel-plotter-b1", "elementary-tracker-b1", "analyst"]
+host-fusion = ["global-fusion", "analyst"]
 """
 
 
@@ -203,7 +229,7 @@ def test_identities_are_bound_to_their_hosts_certificates(tmp_path: Path) -> Non
     subjects = {s["id"]: {k: v for k, v in s.items() if k != "id"} for s in acl["subjects"]}
     assert subjects["site-north"] == {"usernames": ["site-north"],
                                       "cert_common_names": ["host-north"]}
-    assert subjects["operator"] == {"usernames": ["operator"],
+    assert subjects["analyst"] == {"usernames": ["analyst"],
                                     "cert_common_names": ["host-north", "host-fusion"]}
     assert subjects["router-south"] == {"usernames": ["router-south"],
                                         "cert_common_names": ["router-south"]}
@@ -215,7 +241,7 @@ def test_identities_are_bound_to_their_hosts_certificates(tmp_path: Path) -> Non
         assert allowed(acl, router, "egress", "query", history) is ok
         assert allowed(acl, router, "ingress", "liveliness_token", token) is ok
     for hosts, key in (('host-north = ["router-north"]', "zenoh.tls.hosts.host-north"),
-                       ('router-fusion = ["operator"]', "zenoh.tls.hosts"),
+                       ('router-fusion = ["analyst"]', "zenoh.tls.hosts"),
                        ('host-north = ["tma-a9"]', "zenoh.tls.hosts.host-north")):
         (tmp_path / "d.toml").write_text(BOUND.split("[zenoh.tls.hosts]")[0]
                                          + f"[zenoh.tls.hosts]\n{hosts}\n")
@@ -348,11 +374,11 @@ def test_wrong_or_missing_credentials_and_foreign_ca_cannot_connect(
         secure: Secure, monkeypatch: pytest.MonkeyPatch) -> None:
     """Each bad client tries for ATTEMPT_S (in parallel); the good one, tried before and
     after with the same limit, shows that this was long enough on this machine."""
-    good = zc(secure, "operator")
+    good = zc(secure, "analyst")
     assert connects(good)
     monkeypatch.setattr(transport, "CONNECT_TIMEOUT_S", ATTEMPT_S)
     wrong = secure.dir / "wrong.txt"
-    wrong.write_text("operator:not-the-password\n")
+    wrong.write_text("analyst:not-the-password\n")
     wrong.chmod(0o600)
     tls = good.tls
     assert tls is not None and good.auth is not None
@@ -374,7 +400,7 @@ def test_wrong_or_missing_credentials_and_foreign_ca_cannot_connect(
 
 
 class Listener:
-    """An operator session subscribed to root/** that keeps every received key."""
+    """An analyst session subscribed to root/** that keeps every received key."""
 
     def __init__(self, z: ZenohConfig) -> None:
         self.session = open_session(z)
@@ -427,12 +453,12 @@ DENIED = ["radar/plots/b2/c1", "radar/plots/b3/c1", "radar/gtracks", "radar/etra
 def test_identities_publish_only_their_keys(secure: Secure) -> None:
     """Site rx1 (base b1) directly on the fusion router: its b1 plots arrive, b2 and b3
     plots, global tracks and other keys never do; global-fusion's tracks arrive, an
-    operator's put never does. Each publisher ends with an allowed marker, so the denied
+    analyst's put never does. Each publisher ends with an allowed marker, so the denied
     samples would have arrived before it."""
-    listener = Listener(zc(secure, "operator"))
+    listener = Listener(zc(secure, "analyst"))
     try:
         time.sleep(0.5)
-        put_all(zc(secure, "operator"), ["radar/gtracks", "radar/plots/b1/c9"], declared=False)
+        put_all(zc(secure, "analyst"), ["radar/gtracks", "radar/plots/b1/c9"], declared=False)
         put_all(zc(secure, site_identity("rx1")), ["radar/plots/b1/c1", *DENIED,
                                                    "radar/plots/b1/c2"])
         put_all(zc(secure, "global-fusion"), ["radar/plots/b1/c3", "radar/gtracks"])
@@ -446,17 +472,17 @@ def test_identities_publish_only_their_keys(secure: Secure) -> None:
 def test_site_router_forwards_only_its_site(secure: Secure) -> None:
     """Site rx1's router (its own certificate, identity router-rx1, mutual TLS, the same
     generated access control) between the site and the fusion router: the site's b1
-    plots reach an operator at the fusion router, another base's plots and global
-    tracks do not; the fusion router's global tracks reach an operator at the site."""
+    plots reach an analyst at the fusion router, another base's plots and global
+    tracks do not; the fusion router's global tracks reach an analyst at the site."""
     port = free_port()
     site_ep = f"tls/127.0.0.1:{port}"
     router = Child("router-rx1", "router", "--config", str(secure.site_config), "--identity",
                    router_identity("rx1"), "--listen", site_ep, "--connect", secure.endpoint,
                    log=secure.dir / "router-rx1.log")
-    central = Listener(zc(secure, "operator"))
+    central = Listener(zc(secure, "analyst"))
     try:
         wait_port(port, timeout=60.0)
-        local = Listener(zc(secure, "operator", site_ep))
+        local = Listener(zc(secure, "analyst", site_ep))
         try:
             time.sleep(1.0)
             put_all(zc(secure, site_identity("rx1"), site_ep),
@@ -483,7 +509,7 @@ def history_replies(z: ZenohConfig, key: str) -> list[bytes]:
 
 
 def test_only_the_bearing_tracker_answers_history_queries(secure: Secure) -> None:
-    """A TMA of array a1 and the operator get the history that bearing-tracker-a1
+    """A TMA of array a1 and the analyst get the history that bearing-tracker-a1
     serves; a site cannot query it; a queryable declared by another identity on the same
     keys is never asked."""
     with open_session(zc(secure, "bearing-tracker-a1")) as bt, \
@@ -495,7 +521,7 @@ def test_only_the_bearing_tracker_answers_history_queries(secure: Secure) -> Non
         time.sleep(0.5)
         try:
             assert history_replies(zc(secure, "tma-a1"), "sonar/history/a1/7") == [b"real"]
-            assert history_replies(zc(secure, "operator"), "sonar/history/a1/7") == [b"real"]
+            assert history_replies(zc(secure, "analyst"), "sonar/history/a1/7") == [b"real"]
             assert history_replies(zc(secure, site_identity("rx1")), "sonar/history/a1/7") == []
         finally:
             real.undeclare()
@@ -515,7 +541,7 @@ def test_stolen_password_is_useless_with_another_hosts_certificate(secure: Secur
     """Attacker model (a): on host rx2 (its certificate host-rx2, not rx1's key) with
     site rx1's stolen password: its b1 plots never arrive, while the same certificate
     with its own identity site-rx2 publishes b2's plots (the end marker)."""
-    listener = Listener(zc(secure, "operator"))
+    listener = Listener(zc(secure, "analyst"))
     try:
         time.sleep(0.5)
         put_all(on_host(secure, site_identity("rx1"), "host-rx2"), ["radar/plots/b1/c1"],
@@ -534,10 +560,10 @@ def router_thief(s: Secure) -> ZenohConfig:
 
 
 def test_router_password_reads_nothing(secure: Secure) -> None:
-    """The thief subscribes to the whole root: global-fusion's tracks reach the operator,
+    """The thief subscribes to the whole root: global-fusion's tracks reach the analyst,
     not the thief."""
     stolen = Inbox()
-    listener = Listener(zc(secure, "operator"))
+    listener = Listener(zc(secure, "analyst"))
     try:
         with open_session(router_thief(secure)) as thief:
             thief.declare_subscriber(f"{ROOT}/**", stolen.on_sample)
@@ -577,14 +603,14 @@ def alive_keys(z: ZenohConfig) -> list[str]:
 
 def test_router_password_cannot_declare_liveliness_of_a_stopped_service(secure: Secure) -> None:
     """The thief declares the token of elementary-tracker-b1 (a site rx1 service, not
-    running): the operator sees global-fusion's token, not the thief's."""
+    running): the analyst sees global-fusion's token, not the thief's."""
     with open_session(zc(secure, "global-fusion")) as gf, \
             open_session(router_thief(secure)) as thief:
         real = gf.liveliness().declare_token(f"{ROOT}/alive/global_fusion/main")
         fake = thief.liveliness().declare_token(f"{ROOT}/alive/elementary_tracker/b1")
         time.sleep(0.5)
         try:
-            assert alive_keys(zc(secure, "operator")) == [f"{ROOT}/alive/global_fusion/main"]
+            assert alive_keys(zc(secure, "analyst")) == [f"{ROOT}/alive/global_fusion/main"]
         finally:
             real.undeclare()
             fake.undeclare()
@@ -594,10 +620,10 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
     """The radar chain of two_targets.toml (SCANS scans), every process authenticated
     under mutual TLS and the access control: the global tracks (numbers, states,
     covariances to 1e-9) of common.wire.radar_chain on the same plots; ``pfusion
-    status`` (operator) lists every service with its counters."""
+    status`` (viewer) lists every service with its counters."""
     d = secure.dir / "chain"
     d.mkdir()
-    listener = open_session(zc(secure, "operator"))
+    listener = open_session(zc(secure, "analyst"))
     inbox = Inbox()
     sub = listener.declare_subscriber(f"{ROOT}/radar/gtracks", inbox.on_sample)
     children: list[Child] = []
@@ -644,6 +670,154 @@ def test_secure_chain_gives_the_in_process_tracks(secure: Secure) -> None:
     assert confirmed > 0
     rows = {"/".join(line.split()[:2]): line.split()[2] for line in status.stdout.splitlines()
             if len(line.split()) > 2}
-    for spec in specs:  # the operator sees every service, with its counters
+    for spec in specs:  # the viewer sees every service, with its counters
         seen = [n for name, n in rows.items() if fnmatch.fnmatchcase(name, spec.alive)]
         assert seen and seen[0] != "-", (spec.alive, status.stdout, status.stderr)
+
+
+def receiver(z: ZenohConfig, keys: list[str]) -> tuple[zenoh.Session, Inbox]:
+    """A session subscribed to each of ``keys`` (under the root) into one inbox."""
+    session = open_session(z)
+    inbox = Inbox()
+    for k in keys:
+        session.declare_subscriber(f"{ROOT}/{k}", inbox.on_sample)
+    return session, inbox
+
+
+def test_viewer_reads_tracks_not_plots_nor_etracks_analyst_reads_everything(
+        secure: Secure) -> None:
+    """Read scopes: site rx1's plots, elementary-tracker-b1's etracks, then global-fusion's
+    tracks. The analyst (root/**) receives all three; the viewer, subscribed to each key,
+    only the global tracks, and nothing more half a second after them."""
+    analyst = Listener(zc(secure, "analyst"))
+    viewer, seen = receiver(zc(secure, "viewer"),
+                            ["radar/plots/b1/*", "radar/etracks/b1", "radar/gtracks"])
+    try:
+        time.sleep(0.5)
+        put_all(zc(secure, site_identity("rx1")), ["radar/plots/b1/c1"])
+        put_all(zc(secure, "elementary-tracker-b1"), ["radar/etracks/b1"])
+        put_all(zc(secure, "global-fusion"), ["radar/gtracks"])
+        keys = analyst.until(f"{ROOT}/radar/gtracks")
+        got: list[str] = []
+        deadline = time.monotonic() + WAIT_S
+        while f"{ROOT}/radar/gtracks" not in got:
+            env = seen.get(0.1)
+            if env is not None:
+                got.append(env.key)
+            assert time.monotonic() < deadline, f"the viewer never got the tracks; got {got}"
+        time.sleep(0.5)
+        while (env := seen.get(0.0)) is not None:
+            got.append(env.key)
+    finally:
+        analyst.close()
+        viewer.close()
+    assert keys == [f"{ROOT}/radar/plots/b1/c1", f"{ROOT}/radar/etracks/b1", f"{ROOT}/radar/gtracks"]
+    assert got == [f"{ROOT}/radar/gtracks"]
+
+
+def test_operator_tma_sets_bounds_a_viewer_cannot(secure: Secure) -> None:
+    """The viewer's bounds and support (plain puts) never reach the analyst; operator-tma's
+    do (support first, bounds as the end marker)."""
+    listener = Listener(zc(secure, "analyst"))
+    try:
+        time.sleep(0.5)
+        put_all(zc(secure, "viewer"), ["sonar/tma/bounds/a1", "sonar/tma/support/a1"],
+                declared=False)
+        put_all(zc(secure, "operator-tma"), ["sonar/tma/support/a1", "sonar/tma/bounds/a1"])
+        keys = listener.until(f"{ROOT}/sonar/tma/bounds/a1")
+    finally:
+        listener.close()
+    assert keys == [f"{ROOT}/sonar/tma/support/a1", f"{ROOT}/sonar/tma/bounds/a1"]
+
+
+SITE_HOST = """
+[zenoh]
+root = "pf/v1"
+
+[[radar.base]]
+id = "b1"
+tx = [-35000.0, 20000.0, 300.0]
+rx = [0.0, 0.0, 30.0]
+channels = ["c1", "c2", "c3"]
+
+[[site]]
+id = "rx1"
+bases = ["b1"]
+
+[zenoh.auth]
+credentials = "credentials.txt"
+
+[zenoh.tls]
+root_ca = "{d}/ca.pem"
+cert = "{d}/host.pem"
+key = "{d}/host.key"
+mtls = true
+"""
+
+
+def test_run_on_a_site_host_with_the_sites_identity(secure: Secure) -> None:
+    """Site rx1's host: its file lists base b1 only and its credentials hold only the
+    identities it runs (site-rx1 and b1's services; no read role). ``pfusion run`` with
+    its default identity (viewer) is refused at once (exit 2, no password); with
+    ``--identity site-rx1`` it starts b1's plotter and tracker, whose liveliness a viewer
+    at the fusion router sees."""
+    d = secure.dir / "site-host"
+    d.mkdir()
+    (d / "site.toml").write_text(SITE_HOST.format(d=secure.dir))
+    mine = ("site-rx1", "channel-plotter-b1", "elementary-tracker-b1")
+    lines = [line for line in (secure.dir / "credentials.txt").read_text().splitlines()
+             if line.partition(":")[0] in mine]
+    (d / "credentials.txt").write_text("\n".join(lines) + "\n")
+    (d / "credentials.txt").chmod(0o600)
+    argv = ("run", "--config", str(d / "site.toml"), "--connect", secure.endpoint)
+    refused = subprocess.run(pfusion_argv(*argv), capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "'viewer'" in refused.stderr, refused.stderr
+    run = Child("run-rx1", *argv, "--identity", "site-rx1", log=d / "run.log")
+    want = [f"{ROOT}/alive/channel_plotter/b1", f"{ROOT}/alive/elementary_tracker/b1"]
+    try:
+        deadline = time.monotonic() + 120
+        while (seen := alive_keys(zc(secure, "viewer"))) != want:
+            assert run.alive() and time.monotonic() < deadline, (seen, (d / "run.log").read_text())
+            time.sleep(0.5)
+    finally:
+        assert run.stop() == 0, (d / "run.log").read_text()
+
+
+def cert_config(d: Path, name: str) -> ZenohConfig:
+    """The [zenoh] table of a deployment (no auth) whose client certificate is <name>."""
+    (d / "d.toml").write_text(MIXED + f'[zenoh.tls]\nroot_ca = "ca.pem"\ncert = "{name}.pem"\n'
+                                      f'key = "{name}.key"\nmtls = true\n')
+    return load(d / "d.toml").zenoh
+
+
+def test_certificate_expiring_within_7_days_warns_once(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    make_ca(tmp_path, "ca")
+    make_cert(tmp_path, "ca", "soon", days=3)
+    z = cert_config(tmp_path, "soon")
+    with caplog.at_level("WARNING"):
+        transport.zenoh_config(["tls/127.0.0.1:1"], [], "client", security=z)
+        transport.zenoh_config(["tls/127.0.0.1:1"], [], "client", security=z)
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert len(warned) == 1 and "zenoh.tls.cert" in warned[0] and "in 3.0 days" in warned[0], warned
+    caplog.clear()
+    make_cert(tmp_path, "ca", "fine")
+    with caplog.at_level("WARNING"):
+        transport.zenoh_config(["tls/127.0.0.1:1"], [], "client", security=cert_config(tmp_path, "fine"))
+    assert not caplog.records
+
+
+def test_expired_certificate_is_refused_with_exit_2(tmp_path: Path) -> None:
+    """In-process: ConfigError naming the key; a service given it exits with code 2 (not
+    restarted by run)."""
+    make_ca(tmp_path, "ca")
+    make_expired_cert(tmp_path, "ca", "old")
+    with pytest.raises(ConfigError) as e:
+        transport.zenoh_config(["tls/127.0.0.1:1"], [], "client",
+                               security=cert_config(tmp_path, "old"))
+    assert e.value.key == "zenoh.tls.cert" and "expired on 2026-01-02" in str(e.value)
+    out = subprocess.run(pfusion_argv("global-fusion", "--config", str(tmp_path / "d.toml"),
+                                      "--connect", "tls/127.0.0.1:1"),
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "zenoh.tls.cert" in out.stderr and "expired" in out.stderr, \
+        out.stderr

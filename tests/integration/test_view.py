@@ -320,8 +320,9 @@ def test_demo_serves_the_view_while_it_runs(tmp_path: Path) -> None:
             demo.wait()
 
 
-def test_view_logs_in_as_the_read_only_operator() -> None:
-    """Under [zenoh.auth] the view is the operator: it may read everything, publish nothing."""
-    from common.deploy.acl import OPERATOR, identity_of
+def test_view_logs_in_as_the_read_only_analyst() -> None:
+    """Under [zenoh.auth] the view is the analyst: it may read everything (it shows
+    etracks, detections and truth too), publish nothing."""
+    from common.deploy.acl import ANALYST, identity_of
 
-    assert identity_of("view") == OPERATOR
+    assert identity_of("view") == ANALYST
