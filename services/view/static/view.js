@@ -210,33 +210,39 @@ function scaleBar(ctx, canvas, xf) {
   canvas.dataset.scale = text;
 }
 
-function ellipse(ctx, xf, x, y, e) {
-  // e = [a, b, angle counter-clockwise from East]; canvas y points down: rotate by -angle.
-  // One whose major semi-axis exceeds the canvas' diagonal is off scale: a dashed ring of
-  // OFF_SCALE_PX marks it instead (its outline would mostly lie outside the canvas, and a
-  // path thousands of pixels long per track is what froze the page).
+// Adds to the current path the ellipse e = [a, b, angle counter-clockwise from East]
+// around (x, y) (canvas y points down: rotated by -angle). One whose major semi-axis
+// exceeds the canvas' diagonal is off scale: its centre goes to `off` instead (drawn as a
+// dashed ring of OFF_SCALE_PX; its outline would lie mostly outside the canvas, and a
+// path thousands of pixels long per track is what froze the page).
+function ellipsePath(ctx, xf, x, y, e, off) {
   if (!e || !fin(x) || !fin(y) || !e.every(fin)) return;
-  const c = ctx.canvas, px = xf.x(x), py = xf.y(y), a = e[0] * xf.s;
-  if (a > Math.hypot(c.width, c.height)) {
-    ctx.setLineDash([2, 3]); ctx.beginPath(); ctx.arc(px, py, OFF_SCALE_PX, 0, 2 * Math.PI); ctx.stroke();
-    ctx.setLineDash([]);
-    return;
-  }
+  const c = ctx.canvas, px = xf.x(x), py = xf.y(y), a = Math.max(e[0] * xf.s, 0.5), r = -e[2];
+  if (a > Math.hypot(c.width, c.height)) { off.push([px, py]); return; }
   if (px + a < 0 || px - a > c.width || py + a < 0 || py - a > c.height) return;  // all outside
-  ctx.beginPath(); ctx.ellipse(px, py, Math.max(a, 0.5), Math.max(e[1] * xf.s, 0.5), -e[2], 0, 2 * Math.PI);
-  ctx.stroke();
+  ctx.moveTo(px + a * Math.cos(r), py + a * Math.sin(r));
+  ctx.ellipse(px, py, a, Math.max(e[1] * xf.s, 0.5), r, 0, 2 * Math.PI);
 }
 
-function polyline(ctx, xf, pts) {
-  ctx.beginPath();
+function ellipses(ctx, xf, items) {  // items: [x, y, ell] in the current stroke style
+  const off = [];
+  ctx.beginPath(); items.forEach((i) => ellipsePath(ctx, xf, i[0], i[1], i[2], off)); ctx.stroke();
+  if (!off.length) return;
+  ctx.setLineDash([2, 3]); ctx.beginPath();
+  off.forEach(([px, py]) => { ctx.moveTo(px + OFF_SCALE_PX, py); ctx.arc(px, py, OFF_SCALE_PX, 0, 2 * Math.PI); });
+  ctx.stroke(); ctx.setLineDash([]);
+}
+
+function linePath(ctx, xf, pts) {  // adds the polyline of pts, broken at non-finite points
   let on = false;
   pts.forEach((p) => {
     if (!fin(p[0]) || !fin(p[1])) { on = false; return; }
     on ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]));
     on = true;
   });
-  ctx.stroke();
 }
+
+function polyline(ctx, xf, pts) { ctx.beginPath(); linePath(ctx, xf, pts); ctx.stroke(); }
 
 // ---- radar plan view ----
 function followed(canvas, tracks) {
@@ -270,7 +276,7 @@ function drawPlan(geo, g) {
     const arcs = topics[`etracks/${b.id}`];
     if (layer("arcs") && arcs) {
       ctx.globalAlpha = 0.6; ctx.lineWidth = 2;
-      arcs.arcs.forEach((a) => polyline(ctx, xf, a.pts));
+      ctx.beginPath(); arcs.arcs.forEach((a) => linePath(ctx, xf, a.pts)); ctx.stroke();
       ctx.globalAlpha = 1;
     }
   });
@@ -286,7 +292,7 @@ function drawPlan(geo, g) {
     ctx.strokeStyle = "#5c6bc0"; ctx.lineWidth = 1.5;
     truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 5));
   }
-  g.tracks.forEach((k) => drawTrack(ctx, xf, k));
+  drawTracks(ctx, xf, g.tracks);
   scaleBar(ctx, canvas, xf);
   $("plan-scale").textContent = canvas.dataset.scale;
 }
@@ -297,27 +303,49 @@ function cross(ctx, px, py, r) {
   ctx.moveTo(px - r, py + r); ctx.lineTo(px + r, py - r); ctx.stroke();
 }
 
-function drawTrack(ctx, xf, k) {
-  const c = COLOURS[k.status] || "#fff", x = k.x[0], y = k.x[2], px = xf.x(x), py = xf.y(y);
-  if (!fin(px) || !fin(py)) return;  // no position: listed, not drawn
-  ctx.strokeStyle = c; ctx.fillStyle = c; ctx.lineWidth = 1.5;
-  if (layer("trails") && k.trail.length > 1) {
-    ctx.globalAlpha = 0.55; polyline(ctx, xf, k.trail); ctx.globalAlpha = 1;
-  }
-  if (layer("ellipses")) ellipse(ctx, xf, x, y, k.ell);
-  ctx.beginPath(); ctx.arc(px, py, 4, 0, 2 * Math.PI); ctx.fill();
-  if (fin(k.x[1]) && fin(k.x[3])) {
-    ctx.beginPath(); ctx.moveTo(px, py); ctx.lineTo(xf.x(x + k.x[1] * LEAD_S), xf.y(y + k.x[3] * LEAD_S)); ctx.stroke();
-  }
-  if (k.amb) {
-    ctx.strokeStyle = AMBIGUOUS; ctx.setLineDash([3, 3]);
-    ctx.beginPath(); ctx.arc(px, py, 10, 0, 2 * Math.PI); ctx.stroke(); ctx.setLineDash([]);
-  }
-  if (k.id === selected) {
-    ctx.strokeStyle = "#ffffff"; ctx.beginPath(); ctx.arc(px, py, 14, 0, 2 * Math.PI); ctx.stroke();
-  }
-  ctx.fillStyle = c; ctx.font = "bold 12px sans-serif";
-  ctx.fillText(`${k.id}${k.amb ? "?" : ""}`, px + 7, py - 7);
+// Tracks drawn in one path per status colour and layer (10^4 tracks: one stroke each
+// cost ~100 ms a frame); the few rings (ambiguous, selected) one by one.
+function drawTracks(ctx, xf, tracks) {
+  const groups = new Map();
+  tracks.forEach((k) => {
+    if (!fin(k.x[0]) || !fin(k.x[2])) return;  // no position: listed, not drawn
+    const c = COLOURS[k.status] || "#fff";
+    if (!groups.has(c)) groups.set(c, []);
+    groups.get(c).push(k);
+  });
+  ctx.lineWidth = 1.5; ctx.font = "bold 12px sans-serif";
+  groups.forEach((ks, c) => {
+    ctx.strokeStyle = c; ctx.fillStyle = c;
+    if (layer("trails")) {
+      ctx.globalAlpha = 0.55; ctx.beginPath(); ks.forEach((k) => linePath(ctx, xf, k.trail)); ctx.stroke();
+      ctx.globalAlpha = 1;
+    }
+    if (layer("ellipses")) ellipses(ctx, xf, ks.map((k) => [k.x[0], k.x[2], k.ell]));
+    ctx.beginPath();
+    ks.forEach((k) => {
+      const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+      ctx.moveTo(px + 4, py); ctx.arc(px, py, 4, 0, 2 * Math.PI);
+    });
+    ctx.fill();
+    ctx.beginPath();
+    ks.forEach((k) => {
+      if (!fin(k.x[1]) || !fin(k.x[3])) return;
+      ctx.moveTo(xf.x(k.x[0]), xf.y(k.x[2]));
+      ctx.lineTo(xf.x(k.x[0] + k.x[1] * LEAD_S), xf.y(k.x[2] + k.x[3] * LEAD_S));
+    });
+    ctx.stroke();
+    ks.forEach((k) => ctx.fillText(`${k.id}${k.amb ? "?" : ""}`, xf.x(k.x[0]) + 7, xf.y(k.x[2]) - 7));
+  });
+  groups.forEach((ks) => ks.forEach((k) => {
+    const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+    if (k.amb) {
+      ctx.strokeStyle = AMBIGUOUS; ctx.setLineDash([3, 3]);
+      ctx.beginPath(); ctx.arc(px, py, 10, 0, 2 * Math.PI); ctx.stroke(); ctx.setLineDash([]);
+    }
+    if (k.id === selected) {
+      ctx.strokeStyle = "#ffffff"; ctx.beginPath(); ctx.arc(px, py, 14, 0, 2 * Math.PI); ctx.stroke();
+    }
+  }));
 }
 
 $("plan").addEventListener("click", (ev) => {
@@ -454,7 +482,7 @@ function tmaPlan(canvas, tma, truth) {
   tma.sols.forEach((s) => {
     const c = s.constrained ? "#4fc3f7" : COLOURS.confirmed, px = xf.x(s.x), py = xf.y(s.y);
     ctx.strokeStyle = c; ctx.fillStyle = c;
-    ellipse(ctx, xf, s.x, s.y, s.ell);
+    ellipses(ctx, xf, [[s.x, s.y, s.ell]]);
     ctx.beginPath(); ctx.arc(px, py, 3.5, 0, 2 * Math.PI); ctx.fill();
     ctx.beginPath(); ctx.moveTo(px, py);
     ctx.lineTo(xf.x(s.x + s.vx * TMA_LEAD_S), xf.y(s.y + s.vy * TMA_LEAD_S)); ctx.stroke();
