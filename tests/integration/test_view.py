@@ -4,7 +4,10 @@ the real view fed by the real radar chain of two_targets.toml. One scenario run,
 several ways: the confirmed tracks and their ids, a track that moves between two
 screenshots (drawn where the page says it is), a click that shows a track's fields, a
 stalled page that blocks nothing, a killed service whose row turns red, and the sonar
-panels. Screenshots go to out/."""
+panels. Issue 32: the page stays responsive and its plans bounded whatever the data
+(unobservable TMA, huge covariances, far and many tracks), zoom / pan / fit all / follow,
+and the freshness badge (live, stale, disconnected when the router dies). Screenshots go
+to out/."""
 
 from __future__ import annotations
 
