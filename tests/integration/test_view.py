@@ -409,9 +409,9 @@ def test_view_stays_responsive_and_bounded_whatever_the_data(browser: Any, tmp_p
             unobservable_tma(3e5, 1e11)["solutions"][0] | {"range_observable": False}]})
         labels = browser.execute_script(
             "Object.assign(topics, arguments[0]); render(); return ['a2', 'a3'].map((a) => "
-            "document.querySelector(`#array-${a} canvas.tma`).dataset.labels);",
+            "document.querySelector(`#array-${a} .sols`).textContent);",
             {n: json.loads(model.topics[n].json()) for n in ("tma/a2", "tma/a3")})
-        assert labels == ["300.00", "range unobservable"], labels
+        assert labels[0].startswith("7: 300.00 km ") and labels[1].startswith("7: range unobservable "), labels
 
         # 10^4 tracks, one message through the view
         rng = np.random.default_rng(1)

@@ -16,7 +16,8 @@ const FLOOR_M = { plan: 3e5, tma: 1e5 };  // ... but never nearer than this
 const MAX_GRID = 40;       // grid lines per direction, at most
 const MAX_ROWS = 500;
 const OFF_SCALE_PX = 18;   // ring drawn for an ellipse larger than the canvas      // rows of the track list, at most
-const SPAN_M = [50, 1e8];  // zoom limits: the canvas width spans between these
+const SPAN_M = [50, 1e8];
+const MIN_AUTO_M = 5e3;    // the automatic extent spans at least this (one own-ship point)  // zoom limits: the canvas width spans between these
 const UNITS = { km: 1000, NM: 1852 };
 const DATA = /^(gtracks|etracks\/|truth_radar|waterfall\/|tma\/|truth_sonar\/)/;
 const topics = {};
@@ -143,7 +144,7 @@ function transform(canvas, box, follow) {
   const n = nav(canvas);
   if (n.auto) {
     const pad = 30, w = canvas.width - 2 * pad, h = canvas.height - 2 * pad;
-    const s = Math.min(w / Math.max(box[1] - box[0], 1), h / Math.max(box[3] - box[2], 1));
+    const s = Math.min(w / Math.max(box[1] - box[0], MIN_AUTO_M), h / Math.max(box[3] - box[2], MIN_AUTO_M));
     Object.assign(n, { cx: (box[0] + box[1]) / 2, cy: (box[2] + box[3]) / 2, s: clampS(canvas, s) });
   }
   if (follow) { n.cx = follow[0]; n.cy = follow[1]; }
@@ -422,7 +423,7 @@ function arrayPanel(id) {
     `<canvas class="waterfall" width="560" height="320"></canvas></div>` +
     `<div><div class="quiet">TMA: own ship, solutions, 2-sigma ellipses, course and speed ` +
     `<span class="age" data-topic="tma/${id}"></span> <button class="fit">fit all</button></div>` +
-    `<canvas class="tma" width="420" height="320"></canvas></div>`;
+    `<canvas class="tma" width="420" height="320"></canvas><div class="sols"></div></div>`;
   host.appendChild(el);
   el.querySelector(".fit").addEventListener("click", () => fitAll(el.querySelector(".tma")));
   return el;
@@ -479,19 +480,29 @@ function tmaPlan(canvas, tma, truth) {
     ctx.strokeStyle = "#5c6bc0";
     truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 4));
   }
-  tma.sols.forEach((s) => {
+  const own = tma.own.length ? tma.own[tma.own.length - 1] : [0, 0], far = 2 * canvas.width / xf.s;
+  const lines = tma.sols.map((s) => {
     const c = s.constrained ? "#4fc3f7" : COLOURS.confirmed, px = xf.x(s.x), py = xf.y(s.y);
-    ctx.strokeStyle = c; ctx.fillStyle = c;
+    const range = s.range_obs === false ? "range unobservable" : `${dist(s.range)} ${unit}`;
+    const text = `${s.track}: ${range} ${num(s.course, 0)}\u00b0 ${num(s.speed * 1.9438, 1)} kn`;
+    ctx.strokeStyle = c; ctx.fillStyle = c; ctx.font = "11px sans-serif";
+    if (s.range_obs === false) {  // what is known: the bearing, dashed from own ship
+      const b = Math.atan2(s.x - own[0], s.y - own[1]);
+      ctx.setLineDash([6, 4]); ctx.beginPath(); ctx.moveTo(xf.x(own[0]), xf.y(own[1]));
+      ctx.lineTo(xf.x(own[0] + far * Math.sin(b)), xf.y(own[1] + far * Math.cos(b))); ctx.stroke();
+      ctx.setLineDash([]);
+    }
     ellipses(ctx, xf, [[s.x, s.y, s.ell]]);
     ctx.beginPath(); ctx.arc(px, py, 3.5, 0, 2 * Math.PI); ctx.fill();
     ctx.beginPath(); ctx.moveTo(px, py);
     ctx.lineTo(xf.x(s.x + s.vx * TMA_LEAD_S), xf.y(s.y + s.vy * TMA_LEAD_S)); ctx.stroke();
-    ctx.font = "11px sans-serif";
-    const range = s.range_obs === false ? "range unobservable" : `${dist(s.range)} ${unit}`;
-    ctx.fillText(`${s.track}: ${range} ${num(s.course, 0)}\u00b0 ${num(s.speed * 1.9438, 1)} kn`, px + 6, py - 6);
+    ctx.fillText(text, px + 6, py - 6);
+    return text;
   });
   scaleBar(ctx, canvas, xf);
-  canvas.dataset.labels = tma.sols.map((s) => (s.range_obs === false ? "range unobservable" : dist(s.range))).join("|");
+  // the same lines under the plan: a solution off the canvas is still read
+  const list = canvas.parentElement.querySelector(".sols");
+  list.replaceChildren(...lines.map((t) => Object.assign(document.createElement("div"), { textContent: t })));
 }
 
 // ---- services: the table of pfusion status; red when a token goes without a normal end ----
