@@ -64,6 +64,7 @@ class Service:
         self._entities: list[Any] = []
         self._stop = threading.Event()
         self._last_put = float("-inf")
+        self._started = time.monotonic()
         self.session = open_session(cfg.zenoh)
 
     def key(self, suffix: str) -> str:
@@ -134,6 +135,9 @@ class Service:
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
             if at_end is not None:
                 self._guard("(end of input)", at_end)
+            # a normal end: the last counters say so (the view shows "finished", not gone)
+            self._guard("(end)", lambda: self.publish(f"metrics/{self.name}/{self.instance}",
+                                                      self.metrics() | {"state": "finished"}))
         finally:
             signals.close()
             token.undeclare()
@@ -186,6 +190,7 @@ class Service:
             "p50_ms": float(np.percentile(d, 50)) if d.size else 0.0,
             "p99_ms": float(np.percentile(d, 99)) if d.size else 0.0,
             "queue": self.inbox.depth,
+            "up_s": time.monotonic() - self._started,
         }
 
     def close(self) -> None:

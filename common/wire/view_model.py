@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from common.deploy.config import Config
+from common.wire.view_services import ServicesTable, Who
 
 TRAIL = 30
 TRAIL_DT = 1.0
@@ -75,7 +76,14 @@ def bistatic_arc(rb: float, theta: float, sigma_theta: float, tx: np.ndarray,
 
 
 def _round(a: Any, nd: int = 1) -> Any:
-    return np.round(np.asarray(a, dtype=float), nd).tolist()
+    """Rounded nested lists; non-finite values become None (JSON null: NaN and
+    Infinity are not JSON, and one would make the page drop the whole message)."""
+    r = np.round(np.asarray(a, dtype=float), nd)
+    if np.isfinite(r).all():
+        return r.tolist()
+    out = r.astype(object)
+    out[~np.isfinite(r)] = None
+    return out.tolist()
 
 
 @dataclass
@@ -121,9 +129,8 @@ class ViewModel:
         self.topics: dict[str, _Topic] = {}
         self._tracks: dict[int, _Track] = {}
         self._arrays: dict[str, _Array] = {}
-        self._alive: set[tuple[str, str]] = set()
-        self._metrics: dict[tuple[str, str], dict[str, Any]] = {}
-        self._seen_services: set[tuple[str, str]] = set()
+        self._services = ServicesTable()
+        self._link: bool | None = None
         self._topic("geometry").set({
             "root": cfg.zenoh.root,
             "bases": [{"id": b.id, "tx": _round(b.tx[:2]), "rx": _round(b.rx[:2])}
@@ -156,11 +163,14 @@ class ViewModel:
             P = np.array([k["P"] for k in tracks], dtype=float).reshape(-1, 6, 6)
             x, ell = _round(xa), _round(ellipses(P[:, POS][:, :, POS]), 3)
             sig = _round(np.sqrt(np.maximum(np.diagonal(P, axis1=1, axis2=2), 0.0)), 2)
-            trail_xy = np.rint(xa[:, POS]).astype(int).tolist()
+            xy = xa[:, POS]
+            finite = np.isfinite(xy).all(axis=1)  # a non-finite position leaves no trail point
+            xy = np.clip(np.where(finite[:, None], xy, 0.0), -1e12, 1e12)
+            trail_xy = np.rint(xy).astype(np.int64).tolist()
         for i, k in enumerate(tracks):
             mem = self._tracks.setdefault(ids[i], _Track())
             mem.seen += 1
-            if t >= mem.trail_t + TRAIL_DT:
+            if t >= mem.trail_t + TRAIL_DT and finite[i]:
                 mem.trail.append(trail_xy[i])
                 mem.trail_t = t
             out.append({
@@ -230,6 +240,7 @@ class ViewModel:
                       "vx": round(s["vx"], 2), "vy": round(s["vy"], 2),
                       "range": round(s["range"], 1), "course": round(float(np.degrees(s["course"])), 2),
                       "speed": round(s["speed"], 2), "constrained": bool(s["constrained"]),
+                      "range_obs": bool(s.get("range_observable", True)),
                       "ell": _round(e, 3)} for s, e in zip(sols, ell)],
         })
 
@@ -239,39 +250,35 @@ class ViewModel:
             "t": float(msg["t"]), "id": msg["id"].tolist(), "x": _round(msg["x"]),
             "y": _round(msg["y"]), "own": [round(msg["own"]["x"], 1), round(msg["own"]["y"], 1)]})
 
-    def set_alive(self, live: set[tuple[str, str]]) -> None:
-        """The (service, instance) liveliness tokens present now."""
-        if live != self._alive:
-            self._alive = set(live)
-            self._services()
+    def set_alive(self, live: set[Who], now: float) -> None:
+        """The (service, instance) liveliness tokens present now (``now``: monotonic s)."""
+        if self._services.set_alive(live, now):
+            self._topic("services").set({"rows": self._services.rows(now)})
 
-    def set_metrics(self, metrics: dict[tuple[str, str], dict[str, Any]]) -> None:
+    def set_metrics(self, metrics: dict[Who, dict[str, Any]], now: float) -> None:
         """The latest counters per (service, instance) (``pfusion status``'s)."""
-        changed = {k: m for k, m in metrics.items() if self._metrics.get(k) is not m}
-        if changed:
-            self._metrics.update(changed)
-            self._services()
+        if self._services.set_metrics(metrics, now):
+            self._topic("services").set({"rows": self._services.rows(now)})
 
-    def _services(self) -> None:
-        """One row per service ever seen: alive now or not (red on the page)."""
-        self._seen_services |= self._alive | set(self._metrics)
-        rows = []
-        for svc in sorted(self._seen_services):
-            m = self._metrics.get(svc)
-            row: dict[str, Any] = {"service": svc[0], "instance": svc[1], "alive": svc in self._alive}
-            if m is not None:
-                row |= {"in": m["in"], "out": m["out"], "rejected": sum(m.get("rejected", {}).values()),
-                        "reasons": m.get("rejected", {}), "missed": sum(m.get("missed", {}).values()),
-                        "p50": round(m["p50_ms"], 2), "p99": round(m["p99_ms"], 2),
-                        "queue": m["queue"], "t": round(m["t"], 3)}
-            rows.append(row)
-        self._topic("services").set({"rows": rows})
+    def sim_status(self, msg: dict[str, Any], now: float) -> None:
+        """A simulator's ``sim/status``: ``done`` means its token goes as finished."""
+        if msg["state"] == "done" and self._services.sim_done():
+            self._topic("services").set({"rows": self._services.rows(now)})
 
-    def delta(self, sent: dict[str, int]) -> tuple[str | None, dict[str, int]]:
-        """The JSON message ``{"topics": {name: state}}`` of every topic whose version is
-        not the one in ``sent`` (None if none), and the versions it carries."""
+    def set_link(self, router: bool) -> None:
+        """Whether the view's session has a router now (topic ``link``, set on change)."""
+        if router != self._link:
+            self._link = router
+            self._topic("link").set({"router": router})
+
+    def delta(self, sent: dict[str, int], extra: dict[str, Any] | None = None
+              ) -> tuple[str | None, dict[str, int]]:
+        """The JSON message ``{"topics": {name: state}, **extra}`` of every topic whose
+        version is not the one in ``sent`` (None if none), and the versions it carries."""
         changed = [(n, t) for n, t in self.topics.items() if sent.get(n) != t.version]
         if not changed:
             return None, sent
         body = ",".join(f"{json.dumps(n)}:{t.json()}" for n, t in changed)
-        return "{\"topics\":{" + body + "}}", sent | {n: t.version for n, t in changed}
+        more = "".join(f",{json.dumps(k)}:{json.dumps(v, separators=(',', ':'))}"
+                       for k, v in (extra or {}).items())
+        return "{\"topics\":{" + body + "}" + more + "}", sent | {n: t.version for n, t in changed}

@@ -23,6 +23,7 @@ import json
 import logging
 import signal
 import sys
+import time
 from typing import Any
 
 import zenoh
@@ -34,12 +35,12 @@ from common.cli import add_common, load_config
 from common.wire import protocol
 from common.wire.geojson import collection, site_features, track_features, view_shapes
 from common.wire.view_model import ViewModel
-from services.view.server import Hub, app
+from services.view.server import STALE_S, Hub, app
 
 ALIVE_PERIOD_S = 1.0
 LATEST_ONLY = {"gtracks", "etracks", "truth_radar", "tma", "truth_sonar"}
 GEOJSON_PATH = "/tracks.geojson"
-KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sonar/detections/*",
+KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sim/status", "sonar/detections/*",
         "sonar/btracks/*", "sonar/tma/*")
 log = logging.getLogger("view")
 
@@ -47,6 +48,8 @@ log = logging.getLogger("view")
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p, config_required=False)
     p.add_argument("--port", type=int, default=8080, help="HTTP port of the page (0: any free one)")
+    p.add_argument("--stale", type=float, default=STALE_S, metavar="S",
+                   help="the page says stale after S s without a data message (default %(default)s)")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default loopback only; 0.0.0.0 for every interface)")
 
@@ -92,22 +95,32 @@ class Feed:
             for kind, env in batch.values():
                 self._ingest(kind, env)
             take(self.metrics_inbox, self.metrics)
-            self.hub.model.set_metrics(self.metrics)
+            self.hub.model.set_metrics(self.metrics, time.monotonic())
             self.hub.bump()
 
     def _ingest(self, kind: str, env: Envelope) -> None:
         try:
-            self.hub.model.ingest(kind, protocol.decode(kind, env.payload))
+            msg = protocol.decode(kind, env.payload)
+            if kind == "sim_status":
+                self.hub.model.sim_status(msg, time.monotonic())
+            else:
+                self.hub.model.ingest(kind, msg)
         except ValueError as e:  # DecodeError, or a base the deployment lacks
             n = self.hub.counters["rejected"] = self.hub.counters["rejected"] + 1
             if n <= 10 or n % 1000 == 0:  # the first ones, then one in 1000
                 log.error("rejected %s (%d so far): %s", env.key, n, e)
 
     async def watch_alive(self) -> None:
-        """The liveliness tokens every ALIVE_PERIOD_S (a killed service's row turns red)."""
+        """The liveliness tokens and whether the session has a router, every
+        ALIVE_PERIOD_S (a killed service's row turns red). Without a router the tokens
+        are unknown, not gone: the rows keep their last state (the page says
+        disconnected)."""
         while True:
-            live = await asyncio.to_thread(alive, self.session, self.root)
-            self.hub.model.set_alive(set(live))
+            router = await asyncio.to_thread(lambda: bool(list(self.session.info.routers_zid())))
+            self.hub.model.set_link(router)
+            if router:
+                live = await asyncio.to_thread(alive, self.session, self.root)
+                self.hub.model.set_alive(set(live), time.monotonic())
             self.hub.bump()
             await asyncio.sleep(ALIVE_PERIOD_S)
 
@@ -148,7 +161,7 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
     stop = asyncio.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
-    hub = Hub(model)
+    hub = Hub(model, stale_s=args.stale)
     feed = Feed(session, hub, root, loop)  # subscribed before the page can be reached
     application = app(hub)
     application.middlewares.append(geojson_route(model))

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -25,26 +26,45 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from common.wire.view_model import ViewModel
 
 MIN_INTERVAL_S = 0.1
+STALE_S = 5.0   # no data message for this long: the page says stale
+ROUTER_S = 5.0  # the view without a router for this long: the page says disconnected
 CLOSE_TIMEOUT_S = 1.0
 STATIC = files("services.view") / "static"
 CONTENT_TYPES = {".html": "text/html", ".js": "text/javascript", ".css": "text/css"}
 
 
 class Hub:
-    """The model plus a generation counter that page feeds wait on."""
+    """The model plus a generation counter that page feeds wait on, and when each topic
+    last changed (``received``, monotonic s): every message to a page carries each
+    topic's age (``ages``, s) and the page's thresholds (``limits``), from which the page
+    tells live, stale and disconnected (docs/view.md)."""
 
-    def __init__(self, model: ViewModel) -> None:
+    def __init__(self, model: ViewModel, stale_s: float = STALE_S, router_s: float = ROUTER_S) -> None:
         self.model = model
         self.generation = 0
         self._changed = asyncio.Event()
         self.counters: Counter[str] = Counter()
         self.pages: set[Page] = set()
+        self.limits = {"stale_s": stale_s, "router_s": router_s}
+        self.received: dict[str, float] = {}
+        self._versions: dict[str, int] = {}
 
     def bump(self) -> None:
-        """The model changed: wake every page feed."""
+        """The model changed: note which topics did, when, and wake every page feed."""
+        now = time.monotonic()
+        for name, topic in self.model.topics.items():
+            if self._versions.get(name) != topic.version:
+                self._versions[name] = topic.version
+                self.received[name] = now
         self.generation += 1
         self._changed.set()
         self._changed = asyncio.Event()
+
+    def extra(self) -> dict[str, Any]:
+        """What a message carries beside the topics: ages of every topic now, limits."""
+        now = time.monotonic()
+        return {"ages": {n: round(now - t, 2) for n, t in self.received.items()},
+                "limits": self.limits}
 
     async def wait_newer(self, generation: int) -> int:
         while self.generation == generation:
@@ -73,7 +93,7 @@ async def _feed(page: Page, hub: Hub) -> None:
     sent: dict[str, int] = {}
     generation = -1
     while not page.ws.closed:
-        text, sent = hub.model.delta(sent)
+        text, sent = hub.model.delta(sent, hub.extra())
         if text is not None:
             page.waiting = True
             await page.ws.send_str(text)

@@ -159,20 +159,65 @@ def test_tma_solution_has_its_ellipse_and_course() -> None:
     m.ingest("tma", wire("tma", {"t": 60.0, "array": "a1", "solutions": [sol]}))
     s = json.loads(m.topics["tma/a1"].json())["sols"][0]
     assert s["ell"] == [400.0, 200.0, 0.0] and s["course"] == 90.0 and s["track"] == 4
+    assert s["range_obs"] is True  # range_observable is optional: observable unless said
+    m.ingest("tma", {"t": 61.0, "array": "a1", "solutions": [sol | {"range_observable": False}]})
+    assert json.loads(m.topics["tma/a1"].json())["sols"][0]["range_obs"] is False
 
 
 def test_services_rows_turn_dead_when_their_token_goes() -> None:
     m = ViewModel(CFG)
     metrics = {"in": 10, "out": 4, "rejected": {"decode:rb": 2, "late": 1},
                "missed": {"k1": 3}, "p50_ms": 0.5, "p99_ms": 2.0, "queue": 0, "t": 12.0}
-    m.set_alive({("global_fusion", "main"), ("test", "collector")})
-    m.set_metrics({("global_fusion", "main"): metrics})
+    m.set_alive({("global_fusion", "main"), ("test", "collector")}, 0.0)
+    m.set_metrics({("global_fusion", "main"): metrics}, 0.0)
     rows = json.loads(m.topics["services"].json())["rows"]
     assert [(r["service"], r["alive"]) for r in rows] == [("global_fusion", True), ("test", True)]
     assert (rows[0]["rejected"], rows[0]["missed"], rows[0]["in"]) == (3, 3, 10)
     version = m.topics["services"].version
-    m.set_alive({("global_fusion", "main"), ("test", "collector")})
+    m.set_alive({("global_fusion", "main"), ("test", "collector")}, 0.0)
     assert m.topics["services"].version == version  # nothing changed: nothing resent
-    m.set_alive({("test", "collector")})
+    m.set_alive({("test", "collector")}, 1.0)
     rows = json.loads(m.topics["services"].json())["rows"]
     assert [(r["service"], r["alive"]) for r in rows] == [("global_fusion", False), ("test", True)]
+
+
+def test_services_show_uptime_restarts_and_a_normal_end() -> None:
+    m = ViewModel(CFG)
+    gf, sim = ("global_fusion", "main"), ("simulate", "two_targets")
+    base = {"in": 1, "out": 1, "p50_ms": 0.1, "p99_ms": 0.2, "queue": 0, "t": 1.0}
+
+    def rows() -> dict[str, dict[str, Any]]:
+        return {r["service"]: r for r in json.loads(m.topics["services"].json())["rows"]}
+
+    m.set_alive({gf, sim}, 100.0)
+    m.set_metrics({gf: base | {"up_s": 50.0}}, 100.0)
+    m.set_alive({gf, sim}, 110.0)
+    m.set_metrics({gf: base | {"up_s": 60.0}}, 110.0)
+    r = rows()
+    assert (r["global_fusion"]["up"], r["global_fusion"]["restarts"]) == (60.0, 0)
+    assert r["simulate"]["up"] == 10.0  # no metrics: since the view saw its token
+    m.set_metrics({gf: base | {"up_s": 0.4}}, 112.0)  # restarted between two polls
+    assert rows()["global_fusion"]["restarts"] == 1
+    m.sim_status({"state": "done"}, 113.0)
+    m.set_alive({gf}, 114.0)
+    assert rows()["simulate"]["state"] == "finished"
+    m.set_alive(set(), 115.0)  # killed: gone
+    assert rows()["global_fusion"]["state"] == "gone" and rows()["global_fusion"]["up"] is None
+    m.set_alive({gf}, 116.0)  # back: one more restart
+    m.set_metrics({gf: base | {"up_s": 0.5, "state": "finished"}}, 117.0)
+    m.set_alive(set(), 118.0)
+    assert (rows()["global_fusion"]["state"], rows()["global_fusion"]["restarts"]) == ("finished", 2)
+
+
+def test_non_finite_values_reach_the_page_as_null_and_keep_no_trail() -> None:
+    m = ViewModel(CFG)
+    P = np.diag([np.nan, 1.0, 1e12, 1.0, 1.0, 1.0]).ravel()
+    m.ingest("gtracks", {"t": 1.0, "tracks": [
+        {"id": 1, "status": "confirmed", "x": [np.nan, 0.0, 1e7, 0.0, 0.0, 0.0], "P": P,
+         "score": 1.0, "etracks": [], "ambiguous": False}]})
+    k = json.loads(m.topics["gtracks"].json())["tracks"][0]  # strict JSON: no NaN
+    assert k["x"][0] is None and k["x"][2] == 1e7 and k["trail"] == []
+    m.set_link(False)
+    assert json.loads(m.topics["link"].json()) == {"router": False}
+    text, _ = m.delta({}, {"ages": {"gtracks": 0.5}})
+    assert json.loads(text)["ages"] == {"gtracks": 0.5}

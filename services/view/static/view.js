@@ -1,36 +1,87 @@
 // passive-fusion live view: merges the server's topics (docs/view.md) and draws them.
 // Frame: East-North metres; angles on the wire in degrees, clockwise from North.
+// Whatever the data (null for NaN or infinite values, 1e12 m covariances, 1e4 tracks, a
+// track at 1e7 m) a frame stays bounded: plan extents come from robust statistics,
+// grid lines are capped, ellipses clipped, the track list truncated.
 "use strict";
 
 const COLOURS = { confirmed: "#66bb6a", tentative: "#b0bec5", coasting: "#ffa726" };
 const AMBIGUOUS = "#e040fb";
 const BASE_COLOURS = ["#4fc3f7", "#ffb74d", "#ba68c8", "#81c784", "#f06292", "#fff176"];
-const LEAD_S = 60;       // radar velocity vector: 60 s of motion
-const TMA_LEAD_S = 600;  // TMA course and speed vector: 10 min of motion
+const LEAD_S = 60;         // radar velocity vector: 60 s of motion
+const TMA_LEAD_S = 600;    // TMA course and speed vector: 10 min of motion
+const LIMIT_M = 1e8;       // a coordinate beyond this never counts for an extent
+const OUTLIER_K = 10;      // farther than K x the median distance from the median: an outlier
+const FLOOR_M = { plan: 3e5, tma: 1e5 };  // ... but never nearer than this
+const MAX_GRID = 40;       // grid lines per direction, at most
+const MAX_ROWS = 500;
+const OFF_SCALE_PX = 18;   // ring drawn for an ellipse larger than the canvas      // rows of the track list, at most
+const SPAN_M = [50, 1e8];
+const MIN_AUTO_M = 5e3;    // the automatic extent spans at least this (one own-ship point)  // zoom limits: the canvas width spans between these
+const UNITS = { km: 1000, NM: 1852 };
+const DATA = /^(gtracks|etracks\/|truth_radar|waterfall\/|tma\/|truth_sonar\/)/;
 const topics = {};
+const got = {};            // topic -> page time (s) the view received its latest state
+let limits = { stale_s: 5, router_s: 5 };
+let wsOpen = false;
 let selected = null;
-let extent = null;       // radar plan: world box, only grows so the picture stays still
 let planXf = null;
+let unit = "km";
+const navs = new Map();    // canvas -> {auto, box (auto, grows), cx, cy, s (manual), follow}
 const $ = (id) => document.getElementById(id);
-const km = (m) => (m / 1000).toFixed(2);
+const fin = Number.isFinite;  // false for null (NaN and Infinity on the wire), NaN, Infinity
+const num = (v, d) => (fin(v) ? v.toFixed(d) : "-");
+const dist = (m, d = 2) => (fin(m) ? (m / UNITS[unit]).toFixed(d) : "-");
+const speed = (vx, vy) => (fin(vx) && fin(vy) ? Math.hypot(vx, vy) : NaN);
 const layer = (name) => $("layer-" + name).checked;
+const nowS = () => performance.now() / 1000;
 
 function connect() {
   const ws = new WebSocket(`ws://${location.host}/ws`);
-  ws.onopen = () => { $("conn").textContent = "live"; $("conn").className = "conn up"; };
-  ws.onclose = () => {
-    $("conn").textContent = "disconnected"; $("conn").className = "conn down";
-    setTimeout(connect, 1000);
-  };
+  ws.onopen = () => { wsOpen = true; tick(); };
+  ws.onclose = () => { wsOpen = false; tick(); setTimeout(connect, 1000); };
   ws.onmessage = (ev) => {
     try {
-      Object.assign(topics, JSON.parse(ev.data).topics);
+      const m = JSON.parse(ev.data), now = nowS();
+      Object.assign(topics, m.topics);
+      Object.entries(m.ages || {}).forEach(([n, a]) => { got[n] = now - a; });
+      if (m.limits) limits = m.limits;
       render();
     } finally {
       ws.send("ack");  // the server sends the next message only after this one is drawn
     }
   };
 }
+
+// ---- freshness: badge, data age per panel, UTC clock (every 0.5 s, messages or not) ----
+function age(name) { return got[name] === undefined ? Infinity : nowS() - got[name]; }
+
+function ageText(a) {
+  if (!fin(a)) return "no data";
+  return a < 60 ? `${a.toFixed(1)} s` : a < 3600 ? `${(a / 60).toFixed(1)} min` : `${(a / 3600).toFixed(1)} h`;
+}
+
+function badgeState() {
+  const link = topics.link;
+  if (!wsOpen || (link && !link.router && age("link") >= limits.router_s)) return "disconnected";
+  const newest = Math.min(...Object.keys(got).filter((n) => DATA.test(n)).map(age));
+  return newest >= limits.stale_s ? "stale" : "live";
+}
+
+function tick() {
+  const b = $("conn"), state = badgeState();
+  b.textContent = state; b.className = `conn ${state}`; b.dataset.state = state;
+  document.querySelectorAll(".age").forEach((el) => {
+    const a = age(el.dataset.topic);
+    el.textContent = `age ${ageText(a)}`; el.dataset.age = fin(a) ? a.toFixed(2) : "";
+  });
+  $("clock").textContent = new Date().toISOString().slice(11, 19) + " UTC";
+  document.querySelectorAll("#service-rows td.up").forEach((td) => {
+    const up = +td.dataset.up;
+    td.textContent = td.dataset.up === "" ? "-" : uptime(up + age("services"));
+  });
+}
+setInterval(tick, 500);
 
 function render() {
   const geo = topics.geometry || { bases: [], root: "-" };
@@ -43,51 +94,177 @@ function render() {
   details(g.tracks.find((k) => k.id === selected));
   sonar();
   services();
+  tick();
 }
 
-// ---- radar plan view ----
+let pending = false;
+function schedule() {  // a redraw for navigation, at most one per animation frame
+  if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; render(); }); }
+}
+
+// ---- plan views: robust extents, navigation, grid, scale bar ----
 function grow(box, x, y) {
   box[0] = Math.min(box[0], x); box[1] = Math.max(box[1], x);
   box[2] = Math.min(box[2], y); box[3] = Math.max(box[3], y);
 }
 
-function transform(canvas, box) {
-  const pad = 30, w = canvas.width - 2 * pad, h = canvas.height - 2 * pad;
-  const s = Math.min(w / Math.max(box[1] - box[0], 1), h / Math.max(box[3] - box[2], 1));
-  const cx = (box[0] + box[1]) / 2, cy = (box[2] + box[3]) / 2;
-  return { s, x: (x) => canvas.width / 2 + (x - cx) * s, y: (y) => canvas.height / 2 - (y - cy) * s };
+function median(v) { const s = Float64Array.from(v).sort(); return s[s.length >> 1]; }
+
+// The box of `anchors` (always kept: sensors, own ship) and of the points of `pts` that are
+// not outliers; non-finite and |v| >= LIMIT_M points are ignored. null when nothing is left.
+function robustBox(anchors, pts, floor) {
+  const ok = (p) => fin(p[0]) && fin(p[1]) && Math.abs(p[0]) < LIMIT_M && Math.abs(p[1]) < LIMIT_M;
+  const a = anchors.filter(ok), b = pts.filter(ok), all = a.concat(b);
+  if (!all.length) return null;
+  const cx = median(all.map((p) => p[0])), cy = median(all.map((p) => p[1]));
+  const keep = Math.max(OUTLIER_K * median(all.map((p) => Math.hypot(p[0] - cx, p[1] - cy))), floor);
+  const box = [Infinity, -Infinity, Infinity, -Infinity];
+  a.forEach((p) => grow(box, p[0], p[1]));
+  b.forEach((p) => { if (Math.hypot(p[0] - cx, p[1] - cy) <= keep) grow(box, p[0], p[1]); });
+  return box;
+}
+
+function nav(canvas) {
+  let n = navs.get(canvas);
+  if (!n) { n = { auto: true, box: null, follow: null }; navs.set(canvas, n); listen(canvas, n); }
+  return n;
+}
+
+function xfOf(canvas, cx, cy, s) {
+  const W = canvas.width, H = canvas.height;
+  return { s, cx, cy, x: (x) => W / 2 + (x - cx) * s, y: (y) => H / 2 - (y - cy) * s,
+    wx: (px) => cx + (px - W / 2) / s, wy: (py) => cy - (py - H / 2) / s };
+}
+
+function clampS(canvas, s) { return Math.min(Math.max(s, canvas.width / SPAN_M[1]), canvas.width / SPAN_M[0]); }
+
+// The transform of a plan canvas: in auto mode it fits `box`; after a zoom or a pan, the
+// operator's centre and scale (centred on the followed point when there is one).
+function transform(canvas, box, follow) {
+  const n = nav(canvas);
+  if (n.auto) {
+    const pad = 30, w = canvas.width - 2 * pad, h = canvas.height - 2 * pad;
+    const s = Math.min(w / Math.max(box[1] - box[0], MIN_AUTO_M), h / Math.max(box[3] - box[2], MIN_AUTO_M));
+    Object.assign(n, { cx: (box[0] + box[1]) / 2, cy: (box[2] + box[3]) / 2, s: clampS(canvas, s) });
+  }
+  if (follow) { n.cx = follow[0]; n.cy = follow[1]; }
+  return (canvas.xf = xfOf(canvas, n.cx, n.cy, n.s));
+}
+
+function listen(canvas, n) {
+  const at = (ev) => {
+    const r = canvas.getBoundingClientRect(), k = canvas.width / r.width;
+    return [(ev.clientX - r.left) * k, (ev.clientY - r.top) * k];
+  };
+  canvas.addEventListener("wheel", (ev) => {
+    ev.preventDefault();
+    const xf = canvas.xf;
+    if (!xf) return;
+    const [px, py] = at(ev), wx = xf.wx(px), wy = xf.wy(py);
+    const s = clampS(canvas, xf.s * (ev.deltaY < 0 ? 1.25 : 1 / 1.25));
+    Object.assign(n, { auto: false, s, cx: wx - (px - canvas.width / 2) / s, cy: wy + (py - canvas.height / 2) / s });
+    schedule();
+  }, { passive: false });
+  let drag = null;
+  canvas.addEventListener("mousedown", (ev) => { drag = { p: at(ev), moved: false }; });
+  window.addEventListener("mouseup", () => { if (drag) setTimeout(() => { drag = null; }, 0); });
+  canvas.addEventListener("mousemove", (ev) => {
+    if (!drag || !(ev.buttons & 1) || !canvas.xf) return;
+    const p = at(ev), dx = p[0] - drag.p[0], dy = p[1] - drag.p[1];
+    if (!drag.moved && Math.hypot(dx, dy) < 3) return;
+    drag.moved = true; drag.p = p;
+    Object.assign(n, { auto: false, follow: null, cx: n.cx - dx / n.s, cy: n.cy + dy / n.s });
+    schedule();
+  });
+  canvas.dragged = () => drag !== null && drag.moved;
+}
+
+function fitAll(canvas) { Object.assign(nav(canvas), { auto: true, box: null, follow: null }); render(); }
+
+function nice(v) {  // 1, 2 or 5 x 10^k nearest above v
+  const p = Math.pow(10, Math.floor(Math.log10(v))), m = v / p;
+  return (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10) * p;
 }
 
 function grid(ctx, canvas, xf) {
-  const span = canvas.width / xf.s;
-  const step = [1e3, 2e3, 5e3, 1e4, 2e4, 5e4, 1e5].find((v) => span / v < 12) || 2e5;
+  const u = UNITS[unit], step = nice(canvas.width / xf.s / u / 10) * u;
+  if (!fin(step) || step <= 0) return;
   ctx.strokeStyle = "#1b2834"; ctx.fillStyle = "#4b6075"; ctx.lineWidth = 1; ctx.font = "10px sans-serif";
-  const inv = (px) => (px - xf.x(0)) / xf.s, invy = (py) => -(py - xf.y(0)) / xf.s;
-  for (let v = Math.ceil(inv(0) / step) * step; v < inv(canvas.width); v += step) {
+  const label = (v) => `${+(v / u).toPrecision(6)} ${unit}`;
+  const x0 = Math.ceil(xf.wx(0) / step) * step, y0 = Math.ceil(xf.wy(canvas.height) / step) * step;
+  for (let i = 0, v = x0; i < MAX_GRID && v < xf.wx(canvas.width); i++, v = x0 + i * step) {
     ctx.beginPath(); ctx.moveTo(xf.x(v), 0); ctx.lineTo(xf.x(v), canvas.height); ctx.stroke();
-    ctx.fillText(`${v / 1000} km`, xf.x(v) + 2, canvas.height - 4);
+    ctx.fillText(label(v), xf.x(v) + 2, canvas.height - 4);
   }
-  for (let v = Math.ceil(invy(canvas.height) / step) * step; v < invy(0); v += step) {
+  for (let i = 0, v = y0; i < MAX_GRID && v < xf.wy(0); i++, v = y0 + i * step) {
     ctx.beginPath(); ctx.moveTo(0, xf.y(v)); ctx.lineTo(canvas.width, xf.y(v)); ctx.stroke();
-    ctx.fillText(`${v / 1000} km`, 2, xf.y(v) - 2);
+    ctx.fillText(label(v), 2, xf.y(v) - 2);
   }
 }
 
-function ellipse(ctx, xf, x, y, e) {
-  // e = [a, b, angle counter-clockwise from East]; canvas y points down: rotate by -angle
-  ctx.beginPath();
-  ctx.ellipse(xf.x(x), xf.y(y), Math.max(e[0] * xf.s, 0.5), Math.max(e[1] * xf.s, 0.5), -e[2], 0, 2 * Math.PI);
-  ctx.stroke();
+function scaleBar(ctx, canvas, xf) {
+  const u = UNITS[unit], len = nice(canvas.width / 5 / xf.s / u), px = len * u * xf.s;
+  const text = `${+len.toPrecision(6)} ${unit}`, x = 12, y = canvas.height - 22;
+  ctx.strokeStyle = "#e0e0e0"; ctx.fillStyle = "#e0e0e0"; ctx.lineWidth = 2;
+  ctx.beginPath(); ctx.moveTo(x, y - 5); ctx.lineTo(x, y); ctx.lineTo(x + px, y); ctx.lineTo(x + px, y - 5); ctx.stroke();
+  ctx.font = "11px sans-serif"; ctx.fillText(text, x + 4, y - 6);
+  canvas.dataset.scale = text;
+}
+
+// Adds to the current path the ellipse e = [a, b, angle counter-clockwise from East]
+// around (x, y) (canvas y points down: rotated by -angle). One whose major semi-axis
+// exceeds the canvas' diagonal is off scale: its centre goes to `off` instead (drawn as a
+// dashed ring of OFF_SCALE_PX; its outline would lie mostly outside the canvas, and a
+// path thousands of pixels long per track is what froze the page).
+function ellipsePath(ctx, xf, x, y, e, off) {
+  if (!e || !fin(x) || !fin(y) || !e.every(fin)) return;
+  const c = ctx.canvas, px = xf.x(x), py = xf.y(y), a = Math.max(e[0] * xf.s, 0.5), r = -e[2];
+  if (a > Math.hypot(c.width, c.height)) { off.push([px, py]); return; }
+  if (px + a < 0 || px - a > c.width || py + a < 0 || py - a > c.height) return;  // all outside
+  ctx.moveTo(px + a * Math.cos(r), py + a * Math.sin(r));
+  ctx.ellipse(px, py, a, Math.max(e[1] * xf.s, 0.5), r, 0, 2 * Math.PI);
+}
+
+function ellipses(ctx, xf, items) {  // items: [x, y, ell] in the current stroke style
+  const off = [];
+  ctx.beginPath(); items.forEach((i) => ellipsePath(ctx, xf, i[0], i[1], i[2], off)); ctx.stroke();
+  if (!off.length) return;
+  ctx.setLineDash([2, 3]); ctx.beginPath();
+  off.forEach(([px, py]) => { ctx.moveTo(px + OFF_SCALE_PX, py); ctx.arc(px, py, OFF_SCALE_PX, 0, 2 * Math.PI); });
+  ctx.stroke(); ctx.setLineDash([]);
+}
+
+function linePath(ctx, xf, pts) {  // adds the polyline of pts, broken at non-finite points
+  let on = false;
+  pts.forEach((p) => {
+    if (!fin(p[0]) || !fin(p[1])) { on = false; return; }
+    on ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]));
+    on = true;
+  });
+}
+
+function polyline(ctx, xf, pts) { ctx.beginPath(); linePath(ctx, xf, pts); ctx.stroke(); }
+
+// ---- radar plan view ----
+function followed(canvas, tracks) {
+  const n = nav(canvas);
+  if (n.follow === null) return null;
+  const k = tracks.find((t) => t.id === n.follow);
+  if (k && fin(k.x[0]) && fin(k.x[2])) return [k.x[0], k.x[2]];
+  $("follow-note").textContent = `track ${n.follow} is gone: follow ended`;
+  n.follow = null;
+  return null;
 }
 
 function drawPlan(geo, g) {
-  const canvas = $("plan"), ctx = canvas.getContext("2d");
-  const box = extent ? extent.slice() : [Infinity, -Infinity, Infinity, -Infinity];
-  geo.bases.forEach((b) => { grow(box, b.tx[0], b.tx[1]); grow(box, b.rx[0], b.rx[1]); });
-  g.tracks.forEach((k) => grow(box, k.x[0], k.x[2]));
-  if (!isFinite(box[0])) { grow(box, -5e4, -5e4); grow(box, 5e4, 5e4); }
-  extent = box;
-  const xf = planXf = transform(canvas, box);
+  const canvas = $("plan"), ctx = canvas.getContext("2d"), n = nav(canvas);
+  const anchors = geo.bases.flatMap((b) => [b.tx, b.rx]);
+  const now = robustBox(anchors, g.tracks.map((k) => [k.x[0], k.x[2]]), FLOOR_M.plan);
+  const box = n.box ? n.box.slice() : [Infinity, -Infinity, Infinity, -Infinity];
+  if (now) { grow(box, now[0], now[2]); grow(box, now[1], now[3]); }  // grows: the picture stays still
+  if (!fin(box[0])) { grow(box, -5e4, -5e4); grow(box, 5e4, 5e4); }
+  n.box = box;
+  const xf = planXf = transform(canvas, box, followed(canvas, g.tracks));
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   grid(ctx, canvas, xf);
   geo.bases.forEach((b, i) => {
@@ -100,11 +277,7 @@ function drawPlan(geo, g) {
     const arcs = topics[`etracks/${b.id}`];
     if (layer("arcs") && arcs) {
       ctx.globalAlpha = 0.6; ctx.lineWidth = 2;
-      arcs.arcs.forEach((a) => {
-        ctx.beginPath();
-        a.pts.forEach((p, j) => (j ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]))));
-        ctx.stroke();
-      });
+      ctx.beginPath(); arcs.arcs.forEach((a) => linePath(ctx, xf, a.pts)); ctx.stroke();
       ctx.globalAlpha = 1;
     }
   });
@@ -118,41 +291,68 @@ function drawPlan(geo, g) {
   const truth = topics.truth_radar;
   if (layer("truth") && truth) {
     ctx.strokeStyle = "#5c6bc0"; ctx.lineWidth = 1.5;
-    truth.x.forEach((x, i) => {
-      const px = xf.x(x), py = xf.y(truth.y[i]);
-      ctx.beginPath(); ctx.moveTo(px - 5, py - 5); ctx.lineTo(px + 5, py + 5);
-      ctx.moveTo(px - 5, py + 5); ctx.lineTo(px + 5, py - 5); ctx.stroke();
-    });
+    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 5));
   }
-  g.tracks.forEach((k) => drawTrack(ctx, xf, k));
+  drawTracks(ctx, xf, g.tracks);
+  scaleBar(ctx, canvas, xf);
+  $("plan-scale").textContent = canvas.dataset.scale;
 }
 
-function drawTrack(ctx, xf, k) {
-  const c = COLOURS[k.status] || "#fff", x = k.x[0], y = k.x[2], px = xf.x(x), py = xf.y(y);
-  ctx.strokeStyle = c; ctx.fillStyle = c; ctx.lineWidth = 1.5;
-  if (layer("trails") && k.trail.length > 1) {
-    ctx.globalAlpha = 0.55; ctx.beginPath();
-    k.trail.forEach((p, j) => (j ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]))));
-    ctx.stroke(); ctx.globalAlpha = 1;
-  }
-  if (layer("ellipses")) ellipse(ctx, xf, x, y, k.ell);
-  ctx.beginPath(); ctx.arc(px, py, 4, 0, 2 * Math.PI); ctx.fill();
-  ctx.beginPath(); ctx.moveTo(px, py); ctx.lineTo(xf.x(x + k.x[1] * LEAD_S), xf.y(y + k.x[3] * LEAD_S)); ctx.stroke();
-  if (k.amb) {
-    ctx.strokeStyle = AMBIGUOUS; ctx.setLineDash([3, 3]);
-    ctx.beginPath(); ctx.arc(px, py, 10, 0, 2 * Math.PI); ctx.stroke(); ctx.setLineDash([]);
-  }
-  if (k.id === selected) {
-    ctx.strokeStyle = "#ffffff"; ctx.beginPath(); ctx.arc(px, py, 14, 0, 2 * Math.PI); ctx.stroke();
-  }
-  ctx.fillStyle = c; ctx.font = "bold 12px sans-serif";
-  ctx.fillText(`${k.id}${k.amb ? "?" : ""}`, px + 7, py - 7);
+function cross(ctx, px, py, r) {
+  if (!fin(px) || !fin(py)) return;
+  ctx.beginPath(); ctx.moveTo(px - r, py - r); ctx.lineTo(px + r, py + r);
+  ctx.moveTo(px - r, py + r); ctx.lineTo(px + r, py - r); ctx.stroke();
+}
+
+// Tracks drawn in one path per status colour and layer (10^4 tracks: one stroke each
+// cost ~100 ms a frame); the few rings (ambiguous, selected) one by one.
+function drawTracks(ctx, xf, tracks) {
+  const groups = new Map();
+  tracks.forEach((k) => {
+    if (!fin(k.x[0]) || !fin(k.x[2])) return;  // no position: listed, not drawn
+    const c = COLOURS[k.status] || "#fff";
+    if (!groups.has(c)) groups.set(c, []);
+    groups.get(c).push(k);
+  });
+  ctx.lineWidth = 1.5; ctx.font = "bold 12px sans-serif";
+  groups.forEach((ks, c) => {
+    ctx.strokeStyle = c; ctx.fillStyle = c;
+    if (layer("trails")) {
+      ctx.globalAlpha = 0.55; ctx.beginPath(); ks.forEach((k) => linePath(ctx, xf, k.trail)); ctx.stroke();
+      ctx.globalAlpha = 1;
+    }
+    if (layer("ellipses")) ellipses(ctx, xf, ks.map((k) => [k.x[0], k.x[2], k.ell]));
+    ctx.beginPath();
+    ks.forEach((k) => {
+      const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+      ctx.moveTo(px + 4, py); ctx.arc(px, py, 4, 0, 2 * Math.PI);
+    });
+    ctx.fill();
+    ctx.beginPath();
+    ks.forEach((k) => {
+      if (!fin(k.x[1]) || !fin(k.x[3])) return;
+      ctx.moveTo(xf.x(k.x[0]), xf.y(k.x[2]));
+      ctx.lineTo(xf.x(k.x[0] + k.x[1] * LEAD_S), xf.y(k.x[2] + k.x[3] * LEAD_S));
+    });
+    ctx.stroke();
+    ks.forEach((k) => ctx.fillText(`${k.id}${k.amb ? "?" : ""}`, xf.x(k.x[0]) + 7, xf.y(k.x[2]) - 7));
+  });
+  groups.forEach((ks) => ks.forEach((k) => {
+    const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+    if (k.amb) {
+      ctx.strokeStyle = AMBIGUOUS; ctx.setLineDash([3, 3]);
+      ctx.beginPath(); ctx.arc(px, py, 10, 0, 2 * Math.PI); ctx.stroke(); ctx.setLineDash([]);
+    }
+    if (k.id === selected) {
+      ctx.strokeStyle = "#ffffff"; ctx.beginPath(); ctx.arc(px, py, 14, 0, 2 * Math.PI); ctx.stroke();
+    }
+  }));
 }
 
 $("plan").addEventListener("click", (ev) => {
-  const g = topics.gtracks;
-  if (!g || !planXf) return;
-  const r = ev.target.getBoundingClientRect(), sx = ev.target.width / r.width;
+  const g = topics.gtracks, canvas = ev.target;
+  if (!g || !planXf || canvas.dragged()) return;
+  const r = canvas.getBoundingClientRect(), sx = canvas.width / r.width;
   const cx = (ev.clientX - r.left) * sx, cy = (ev.clientY - r.top) * sx;
   let best = null, bestD = 15;
   g.tracks.forEach((k) => {
@@ -162,39 +362,49 @@ $("plan").addEventListener("click", (ev) => {
   select(best);
 });
 ["trails", "ellipses", "arcs", "truth"].forEach((n) => $("layer-" + n).addEventListener("change", render));
+$("fit-plan").addEventListener("click", () => fitAll($("plan")));
+$("follow").addEventListener("click", () => {
+  if (selected === null) return;
+  const n = nav($("plan"));
+  if (n.auto) n.auto = false;  // keeps the present scale, centred on the track
+  n.follow = selected; $("follow-note").textContent = `following track ${selected}`;
+  render();
+});
+$("units").addEventListener("change", (ev) => { unit = ev.target.value; render(); });
 
 function select(id) { selected = id; render(); }
 
-function course(vx, vy) { return ((Math.atan2(vx, vy) * 180 / Math.PI) + 360) % 360; }
+function course(vx, vy) { return fin(vx) && fin(vy) ? ((Math.atan2(vx, vy) * 180 / Math.PI) + 360) % 360 : NaN; }
 
 function trackTable(tracks) {
-  const body = $("tracks");
-  body.replaceChildren(...tracks.map((k) => {
+  const shown = tracks.slice(0, MAX_ROWS);
+  $("tracks").replaceChildren(...shown.map((k) => {
     const tr = document.createElement("tr");
     tr.dataset.id = k.id; tr.dataset.status = k.status; tr.dataset.x = k.x[0]; tr.dataset.y = k.x[2];
     tr.className = `status-${k.status}${k.amb ? " ambiguous" : ""}${k.id === selected ? " selected" : ""}`;
-    const v = Math.hypot(k.x[1], k.x[3]);
-    [k.id, k.status, km(k.x[0]), km(k.x[2]), km(k.x[4]), v.toFixed(0), course(k.x[1], k.x[3]).toFixed(0)]
+    [k.id, k.status, dist(k.x[0]), dist(k.x[2]), dist(k.x[4]), num(speed(k.x[1], k.x[3]), 0), num(course(k.x[1], k.x[3]), 0)]
       .forEach((c) => { const td = document.createElement("td"); td.textContent = c; tr.appendChild(td); });
     tr.addEventListener("click", () => select(k.id));
     return tr;
   }));
+  $("tracks-more").textContent = tracks.length > MAX_ROWS ? `first ${MAX_ROWS} of ${tracks.length} tracks` : "";
+  $("unit-head").textContent = unit;
 }
 
 function details(k) {
   const el = $("details");
   el.dataset.id = k ? k.id : "";
   if (!k) { el.textContent = selected === null ? "none: click a track on the plan or in the list" : `track ${selected} is gone`; return; }
-  const s = k.sig, x = k.x;
+  const s = k.sig, x = k.x, e = k.ell || [null, null];
   el.textContent = [
     `track ${k.id}  ${k.status}${k.amb ? "  AMBIGUOUS" : ""}`,
-    `position  x ${km(x[0])} km  y ${km(x[2])} km  z ${km(x[4])} km`,
-    `velocity  vx ${x[1].toFixed(1)}  vy ${x[3].toFixed(1)}  vz ${x[5].toFixed(1)} m/s`,
-    `          ${Math.hypot(x[1], x[3]).toFixed(1)} m/s, course ${course(x[1], x[3]).toFixed(1)} deg`,
-    `sigmas    x ${s[0].toFixed(0)}  y ${s[2].toFixed(0)}  z ${s[4].toFixed(0)} m`,
-    `          vx ${s[1].toFixed(1)}  vy ${s[3].toFixed(1)}  vz ${s[5].toFixed(1)} m/s`,
-    `2-sigma   ${k.ell[0].toFixed(0)} x ${k.ell[1].toFixed(0)} m`,
-    `etracks   ${k.et.map((e) => `${e[0]}:${e[1]}`).join(" ") || "none"}`,
+    `position  x ${dist(x[0])} ${unit}  y ${dist(x[2])} ${unit}  z ${dist(x[4])} ${unit}`,
+    `velocity  vx ${num(x[1], 1)}  vy ${num(x[3], 1)}  vz ${num(x[5], 1)} m/s`,
+    `          ${num(speed(x[1], x[3]), 1)} m/s, course ${num(course(x[1], x[3]), 1)} deg`,
+    `sigmas    x ${num(s[0], 0)}  y ${num(s[2], 0)}  z ${num(s[4], 0)} m`,
+    `          vx ${num(s[1], 1)}  vy ${num(s[3], 1)}  vz ${num(s[5], 1)} m/s`,
+    `2-sigma   ${num(e[0], 0)} x ${num(e[1], 0)} m`,
+    `etracks   ${k.et.map((t) => `${t[0]}:${t[1]}`).join(" ") || "none"}`,
     `score     ${k.score}`,
     `history   ${k.n} updates drawn, trail ${k.trail.length} points`,
   ].join("\n");
@@ -208,11 +418,14 @@ function arrayPanel(id) {
   host.querySelectorAll(".quiet").forEach((q) => q.remove());
   el = document.createElement("div");
   el.className = "array"; el.id = `array-${id}`;
-  el.innerHTML = `<h3>array ${id}</h3><div><div class="quiet">bearing-time waterfall (detections, bearing tracks)</div>` +
+  el.innerHTML = `<h3>array ${id}</h3><div><div class="quiet">bearing-time waterfall (detections, bearing tracks) ` +
+    `<span class="age" data-topic="waterfall/${id}"></span></div>` +
     `<canvas class="waterfall" width="560" height="320"></canvas></div>` +
-    `<div><div class="quiet">TMA: own ship, solutions, 2-sigma ellipses, course and speed</div>` +
-    `<canvas class="tma" width="420" height="320"></canvas></div>`;
+    `<div><div class="quiet">TMA: own ship, solutions, 2-sigma ellipses, course and speed ` +
+    `<span class="age" data-topic="tma/${id}"></span> <button class="fit">fit all</button></div>` +
+    `<canvas class="tma" width="420" height="320"></canvas><div class="sols"></div></div>`;
   host.appendChild(el);
+  el.querySelector(".fit").addEventListener("click", () => fitAll(el.querySelector(".tma")));
   return el;
 }
 
@@ -254,46 +467,64 @@ function waterfall(canvas, w) {
 
 function tmaPlan(canvas, tma, truth) {
   const ctx = canvas.getContext("2d");
-  const box = [Infinity, -Infinity, Infinity, -Infinity];
-  tma.own.forEach((p) => grow(box, p[0], p[1]));
-  tma.sols.forEach((s) => { grow(box, s.x - s.ell[0], s.y - s.ell[0]); grow(box, s.x + s.ell[0], s.y + s.ell[0]); });
-  if (truth) truth.x.forEach((x, i) => grow(box, x, truth.y[i]));
-  if (!isFinite(box[0])) return;
-  const xf = transform(canvas, box);
+  // an unobservable range leaves the solution's position out of the extent
+  const pts = tma.sols.filter((s) => s.range_obs !== false).map((s) => [s.x, s.y]);
+  if (truth) truth.x.forEach((x, i) => pts.push([x, truth.y[i]]));
+  const box = robustBox(tma.own, pts, FLOOR_M.tma) || [-1e4, 1e4, -1e4, 1e4];
+  const xf = transform(canvas, box, null);
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   grid(ctx, canvas, xf);
-  ctx.strokeStyle = "#e0e0e0"; ctx.lineWidth = 1.5; ctx.beginPath();
-  tma.own.forEach((p, j) => (j ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]))));
-  ctx.stroke();
+  ctx.strokeStyle = "#e0e0e0"; ctx.lineWidth = 1.5;
+  polyline(ctx, xf, tma.own);
   if (truth) {
     ctx.strokeStyle = "#5c6bc0";
-    truth.x.forEach((x, i) => { const px = xf.x(x), py = xf.y(truth.y[i]);
-      ctx.beginPath(); ctx.moveTo(px - 4, py - 4); ctx.lineTo(px + 4, py + 4); ctx.moveTo(px - 4, py + 4); ctx.lineTo(px + 4, py - 4); ctx.stroke(); });
+    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 4));
   }
-  tma.sols.forEach((s) => {
-    const c = s.constrained ? "#4fc3f7" : COLOURS.confirmed;
-    ctx.strokeStyle = c; ctx.fillStyle = c;
-    ellipse(ctx, xf, s.x, s.y, s.ell);
-    ctx.beginPath(); ctx.arc(xf.x(s.x), xf.y(s.y), 3.5, 0, 2 * Math.PI); ctx.fill();
-    ctx.beginPath(); ctx.moveTo(xf.x(s.x), xf.y(s.y));
+  const own = tma.own.length ? tma.own[tma.own.length - 1] : [0, 0], far = 2 * canvas.width / xf.s;
+  const lines = tma.sols.map((s) => {
+    const c = s.constrained ? "#4fc3f7" : COLOURS.confirmed, px = xf.x(s.x), py = xf.y(s.y);
+    const range = s.range_obs === false ? "range unobservable" : `${dist(s.range)} ${unit}`;
+    const text = `${s.track}: ${range} ${num(s.course, 0)}\u00b0 ${num(s.speed * 1.9438, 1)} kn`;
+    ctx.strokeStyle = c; ctx.fillStyle = c; ctx.font = "11px sans-serif";
+    if (s.range_obs === false) {  // what is known: the bearing, dashed from own ship
+      const b = Math.atan2(s.x - own[0], s.y - own[1]);
+      ctx.setLineDash([6, 4]); ctx.beginPath(); ctx.moveTo(xf.x(own[0]), xf.y(own[1]));
+      ctx.lineTo(xf.x(own[0] + far * Math.sin(b)), xf.y(own[1] + far * Math.cos(b))); ctx.stroke();
+      ctx.setLineDash([]);
+    }
+    ellipses(ctx, xf, [[s.x, s.y, s.ell]]);
+    ctx.beginPath(); ctx.arc(px, py, 3.5, 0, 2 * Math.PI); ctx.fill();
+    ctx.beginPath(); ctx.moveTo(px, py);
     ctx.lineTo(xf.x(s.x + s.vx * TMA_LEAD_S), xf.y(s.y + s.vy * TMA_LEAD_S)); ctx.stroke();
-    ctx.font = "11px sans-serif";
-    ctx.fillText(`${s.track}: ${km(s.range)} km ${s.course.toFixed(0)}\u00b0 ${(s.speed * 1.9438).toFixed(1)} kn`,
-      xf.x(s.x) + 6, xf.y(s.y) - 6);
+    ctx.fillText(text, px + 6, py - 6);
+    return text;
   });
+  scaleBar(ctx, canvas, xf);
+  // the same lines under the plan: a solution off the canvas is still read
+  const list = canvas.parentElement.querySelector(".sols");
+  list.replaceChildren(...lines.map((t) => Object.assign(document.createElement("div"), { textContent: t })));
 }
 
-// ---- services: the table of pfusion status, red when a liveliness token is gone ----
+// ---- services: the table of pfusion status; red when a token goes without a normal end ----
+function uptime(s) {
+  if (!fin(s)) return "-";
+  const h = Math.floor(s / 3600), m = Math.floor(s / 60) % 60, sec = Math.floor(s % 60);
+  return h ? `${h}h${String(m).padStart(2, "0")}m` : m ? `${m}m${String(sec).padStart(2, "0")}s` : `${sec}s`;
+}
+
 function services() {
   const rows = (topics.services || { rows: [] }).rows;
   $("service-rows").replaceChildren(...rows.map((r) => {
     const tr = document.createElement("tr");
-    tr.dataset.service = r.service; tr.dataset.instance = r.instance;
-    tr.className = r.alive ? "alive" : "dead";
+    const state = r.state || (r.alive ? "alive" : "gone");
+    tr.dataset.service = r.service; tr.dataset.instance = r.instance; tr.dataset.state = state;
+    tr.className = { alive: "alive", finished: "finished", gone: "dead" }[state];
     const has = r.in !== undefined;
-    [r.service, r.instance, r.alive ? "yes" : "GONE", ...(has
-      ? [r.in, r.out, r.rejected, r.missed, r.p50.toFixed(2), r.p99.toFixed(2), r.queue, r.t.toFixed(1)]
+    [r.service, r.instance, { alive: "yes", finished: "finished", gone: "GONE" }[state], "", r.restarts ?? 0, ...(has
+      ? [r.in, r.out, r.rejected, r.missed, num(r.p50, 2), num(r.p99, 2), r.queue, num(r.t, 1)]
       : Array(8).fill("-"))].forEach((c) => { const td = document.createElement("td"); td.textContent = c; tr.appendChild(td); });
+    const up = tr.children[3];
+    up.className = "up"; up.dataset.up = fin(r.up) ? r.up : "";
     if (has && r.rejected) tr.title = Object.entries(r.reasons).map(([k, v]) => `${k}=${v}`).join(", ");
     return tr;
   }));
