@@ -2,7 +2,9 @@
 that moves 10-50 deg between samples, and does TMA solve after the approach? In one
 process: simulator -> bearing tracker (common.sonar.trackers.bearing_tracker, the
 scene's [sonar.tracker]) -> TMA manager (common.sonar.tma.manager.TmaManager, defaults)
-fed from the tracker's bearing register, as services/tma is.
+fed from the tracker's bearing register, as services/tma is; each TMA solution is given
+back to the tracker as a hint for its later cycles (common.sonar.bearing.range_noise;
+run_once(..., feedback=False) without). Figures: docs/decisions/017-range-matched-bearing-noise.md.
 
 Run: .venv/bin/python benchmarks/sonar_cpa.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
 
@@ -44,7 +46,7 @@ from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
 from common.sonar.tma.manager import BTrack, BTracks, TmaManager, TrackHistory  # noqa: E402
-from common.sonar.trackers import bearing_tracker  # noqa: E402
+from common.sonar.trackers import TmaHint, bearing_tracker  # noqa: E402
 from common.wire.sim_messages import run_scenario  # noqa: E402
 
 CASES = ("sonar_cpa_coarse", "sonar_cpa_fine_300m", "sonar_cpa_coarse_1km", "sonar_cpa_fine_1km_turn")
@@ -65,8 +67,9 @@ class CpaRun:
     nees: float
 
 
-def run_once(path: Path, seed: int, mode: str = "gnn") -> CpaRun:
-    """One scene, one seed, one association mode."""
+def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
+    """One scene, one seed, one association mode; feedback: the TMA solutions given back to
+    the tracker (common.sonar.bearing.range_noise)."""
     cfg = load(path)
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
@@ -105,6 +108,10 @@ def run_once(path: Path, seed: int, mode: str = "gnn") -> CpaRun:
                     rows = np.column_stack([cols[k] for k in ("t", "brg", "sbrg", "own_x", "own_y")])
                     hist[tid] = TrackHistory(tid, h[0], rows)
             report = mgr.step(b, hist)
+            if feedback:  # the solutions back to the tracker for its later cycles (range_noise)
+                for tid, out in report.solutions:
+                    usable = out.converged and out.range_observable
+                    trk.tma_hint(tid, TmaHint(out.t, out.x, out.y, out.vx, out.vy, usable))
     t, xy, x = np.asarray(times), np.asarray(own), np.asarray(truth)
     t_cpa = float(t[np.argmin(np.hypot(*(x[:, :2] - xy).T))])
     sol = dict(report.solutions).get(first) if report is not None and first is not None else None
