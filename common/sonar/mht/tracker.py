@@ -155,11 +155,12 @@ class MhtTracker:
         self.hx, self.hP, self.hc, self.ht, self.hm, src = branch(  # models (mht.models)
             self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
         self.hmeas = self.hmeas[src]
-        q = np.asarray(self.q_models)[self.hm]
+        Qm = np.stack([self.process_noise(T, q) for q in self.q_models])[self.hm]
         q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta, t, own_x, own_y)[self.ht]  # issue 31
-        q = np.where(self.hm == len(self.q_models) - 1, q_man, q)
-        # 000 x^pre = F x, P^pre = F P F' + Q
-        xp, Pp = predict(self.hx, self.hP, F, self.process_noise(np.full(q.shape, T), q))
+        raised = (self.hm == len(self.q_models) - 1) & (q_man > self.params.q_theta)
+        if raised.any():
+            Qm[raised] = self.process_noise(np.full(int(raised.sum()), T), q_man[raised])
+        xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
