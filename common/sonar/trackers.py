@@ -11,11 +11,12 @@ from typing import Protocol
 import numpy as np
 
 from common.core.crossing import CrossingParams
+from common.sonar.bearing.range_noise import TmaHint
 from common.sonar.bearing.tracker import BearingTracker, Cycle
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
 from common.sonar.mht.tracker import MhtTracker
 
-__all__ = ["BearingTrackerCore", "Cycle", "bearing_tracker"]
+__all__ = ["BearingTrackerCore", "Cycle", "TmaHint", "bearing_tracker"]
 
 
 class BearingTrackerCore(Protocol):
@@ -29,6 +30,10 @@ class BearingTrackerCore(Protocol):
              own_x: float = 0.0, own_y: float = 0.0, freq: np.ndarray | None = None,
              sbrg: np.ndarray | None = None) -> Cycle:
         """Process the detection list of time t and return the tracks."""
+        ...
+
+    def tma_hint(self, track_id: int, hint: TmaHint) -> None:
+        """Give a track its contact's latest TMA solution (common.sonar.bearing.range_noise)."""
         ...
 
     def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:

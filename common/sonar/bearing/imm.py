@@ -32,7 +32,7 @@ from common.core.gating import quadratic_form
 from common.core.imm import combine, gaussian_loglik, mix, probabilities, transition
 from common.core.kalman import predict, update
 
-QFunc = Callable[[np.ndarray, float], np.ndarray]
+QFunc = Callable[[np.ndarray, np.ndarray | float], np.ndarray]
 
 
 class BearingImm:
@@ -44,15 +44,16 @@ class BearingImm:
         self.mu0 = self.sojourn / self.sojourn.sum()  # stationary probabilities
 
     def predict(self, mu: np.ndarray, xm: np.ndarray, Pm: np.ndarray, T: np.ndarray,
-                F: np.ndarray, Q: QFunc, memory: np.ndarray | None = None
-                ) -> tuple[np.ndarray, ...]:
+                F: np.ndarray, Q: QFunc, memory: np.ndarray | None = None,
+                q_manoeuvre: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
         """Mixing and model-matched prediction (000 x^pre = F x, P^pre = F P F' + Q per
         model; the quiet Q in both models for the tracks flagged in `memory` (N,), 004
-        memory mode): predicted probabilities c (N, 2), xm, Pm, combined x (N, n), P."""
+        memory mode; `q_manoeuvre` (N,): the manoeuvre model's power per track, default
+        its q_theta): predicted probabilities c (N, 2), xm, Pm, combined x (N, n), P."""
         c, x0, P0 = mix(mu, _near(xm, xm[:, :1]), Pm, transition(T, self.sojourn))
         Q_quiet = Q(T, self.q[0])
         for j, q in enumerate(self.q):
-            Qj = Q_quiet if j == 0 else Q(T, q)
+            Qj = Q_quiet if j == 0 else Q(T, q if q_manoeuvre is None else q_manoeuvre)
             if j and memory is not None:
                 Qj = np.where(memory[:, None, None], Q_quiet, Qj)
             x0[:, j], P0[:, j] = predict(x0[:, j], P0[:, j], F, Qj)

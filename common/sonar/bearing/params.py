@@ -119,7 +119,7 @@ def transition(narrowband: bool, T: np.ndarray | float) -> np.ndarray:
 
 
 def process_noise(p: TrackerParams, narrowband: bool, T: np.ndarray | float,
-                  q_theta: float | None = None) -> np.ndarray:
+                  q_theta: np.ndarray | float | None = None) -> np.ndarray:
     """000 Q over T seconds with the bearing noise power q_theta (default p.q_theta)."""
     q = p.q_theta if q_theta is None else q_theta
     return bearing_freq_Q(T, q, p.q_a, p.q_f) if narrowband else bearing_Q(T, q, p.q_a)

@@ -11,7 +11,9 @@ time only:
      leaving the ambiguity keeps its detection only if no other confirmed track's
      prediction is nearer to it (deviation; common.sonar.bearing.crossing); a pair of
      frozen tracks whose order is sure is released for the scan (deviation;
-     common.sonar.bearing.pairs);
+     common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
+     predicts its manoeuvre model with the range-matched noise of
+     common.sonar.bearing.range_noise;
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
@@ -57,6 +59,7 @@ from common.sonar.bearing.model import (
 from common.sonar.bearing.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
 from common.sonar.bearing.pairs import centroid_update, release
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
+from common.sonar.bearing.range_noise import RangeNoise, TmaHint
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,7 @@ class BearingTracker:
         self.multiline = (MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
                           if self.narrowband else None)
         self.history = BearingHistory(p.history_keep_deleted)
+        self.range_noise = RangeNoise()
         self.t: float | None = None
         self._next_uid = 0
         self._ml_tracks: list[MultiLineTrack] = []
@@ -119,7 +123,7 @@ class BearingTracker:
     def _F(self, T: np.ndarray) -> np.ndarray:
         return transition(self.narrowband, T)
 
-    def _Q(self, T: np.ndarray, q_theta: float | None = None) -> np.ndarray:
+    def _Q(self, T: np.ndarray, q_theta: np.ndarray | float | None = None) -> np.ndarray:
         return process_noise(self.params, self.narrowband, T, q_theta)
 
     def bearing_sigma(self, brg: np.ndarray, amp: np.ndarray, heading: float) -> np.ndarray:
@@ -154,12 +158,13 @@ class BearingTracker:
         idx = tab.active_indices()
         x, P = tab.x[idx], tab.P[idx]
         T = t - tab.t_last[idx]
+        q_man = self.range_noise.q_theta(tab.id[idx], p.q_theta, t, own_x, own_y)  # issue 31
         if idx.size and self.imm is not None:  # 004 memory mode: quiet Q in both models
             memory = tab.ambiguous[idx] & (self.crossing is not None and self.crossing.memory)
             c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T),
-                                               self._Q, memory)
+                                               self._Q, memory, q_man)
         elif idx.size:
-            x, P = predict(x, P, self._F(T), self._Q(T))  # 000 x^pre = F x, P^pre = F P F' + Q
+            x, P = predict(x, P, self._F(T), self._Q(T, q_man))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         conf = tab.status[idx] == Status.CONFIRMED
         p_d = (detection_probability(x[:, 2], np.sqrt(P[:, 2, 2]), p.p_d, p.d_thr)  # 000 P_D(erfc)
@@ -217,6 +222,7 @@ class BearingTracker:
         self._group_lines()
 
         live = tab.active_indices()
+        self.range_noise.forget(tab.id[live])
         ok = alpha[rows] == 1.0  # the register: the detections used in full (not 004's frozen)
         reg = np.r_[cols_[ok], np.flatnonzero(unused)]
         self.history.append(t, np.r_[tab.uid[idx[rows[ok]]], tab.uid[opened]], z[reg, 0],
@@ -291,6 +297,10 @@ class BearingTracker:
             tab.P[live].copy(), tab.score[live].copy(), tab.ambiguous[live].copy(),
             tab.ml[live].copy(), list(self._ml_tracks),
         )
+
+    def tma_hint(self, track_id: int, hint: TmaHint) -> None:
+        """The contact's latest TMA solution, used by later cycles (range_noise)."""
+        self.range_noise.set(track_id, hint)
 
     # ------------------------------------------------------------------ register
 

@@ -77,6 +77,7 @@ from common.sonar.bearing.measurements import detection_measurements
 from common.sonar.bearing.model import detection_probability, measurement_matrix
 from common.sonar.bearing.multiline import NEW
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
+from common.sonar.bearing.range_noise import RangeNoise, TmaHint
 from common.sonar.bearing.tracker import Cycle
 from common.sonar.mht.hypotheses import (
     LN_2PI,
@@ -124,6 +125,7 @@ class MhtTracker:
         self.t: float | None = None
         self.t_cycle = 0.0
         self.k = 0
+        self.range_noise = RangeNoise()
         self.n_hyp_max = 0
 
     # ------------------------------------------------------------------ model
@@ -132,7 +134,7 @@ class MhtTracker:
         """000 F of this tracker's state over T seconds."""
         return transition(self.narrowband, T)
 
-    def process_noise(self, T: float, q_theta: float) -> np.ndarray:
+    def process_noise(self, T: np.ndarray | float, q_theta: np.ndarray | float) -> np.ndarray:
         """000 Q of this tracker's state over T seconds with bearing noise power q_theta."""
         return process_noise(self.params, self.narrowband, T, q_theta)
 
@@ -153,8 +155,12 @@ class MhtTracker:
         self.hx, self.hP, self.hc, self.ht, self.hm, src = branch(  # models (mht.models)
             self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
         self.hmeas = self.hmeas[src]
-        Qm = np.stack([self.process_noise(T, q) for q in self.q_models])
-        xp, Pp = predict(self.hx, self.hP, F, Qm[self.hm])  # 000 x^pre = F x, P^pre = F P F' + Q
+        Qm = np.stack([self.process_noise(T, q) for q in self.q_models])[self.hm]
+        q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta, t, own_x, own_y)[self.ht]  # issue 31
+        raised = (self.hm == len(self.q_models) - 1) & (q_man > self.params.q_theta)
+        if raised.any():
+            Qm[raised] = self.process_noise(np.full(int(raised.sum()), T), q_man[raised])
+        xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
@@ -233,6 +239,7 @@ class MhtTracker:
         self.retro.push(CycleRecord(self.hx, self.hP, self.hc, self.ht, tr.uid.copy(), cpar,
                                     x_pre, P_pre, F, rows, det))  # 000 retrodiction
         self.retro.compact(tr.uid)
+        self.range_noise.forget(tr.uid)
         self.n_hyp_max = max(self.n_hyp_max, int(np.bincount(self.ht).max(initial=0)))
         self.t = t
         return Cycle(t, tr.uid.copy(), tr.SA == 1, xi, Pi, tr.ZA.astype(float),
@@ -324,6 +331,10 @@ class MhtTracker:
         return drop
 
     # ------------------------------------------------------------------ register
+
+    def tma_hint(self, track_id: int, hint: TmaHint) -> None:
+        """The contact's latest TMA solution, used by later cycles (range_noise)."""
+        self.range_noise.set(track_id, hint)
 
     def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
         """("confirmed" | "deleted", register) of a confirmed live or recently deleted

@@ -1,0 +1,64 @@
+"""Range-matched bearing noise (issue 31, common.sonar.bearing.range_noise) and the
+close-approach benchmark's in-process chain (benchmarks/sonar_cpa.py) on a fast subset."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from common.sonar.bearing.range_noise import RangeNoise, TmaHint
+from common.sonar.bearing.tracker import BearingTracker, TrackerParams
+
+REPO = Path(__file__).resolve().parents[2]
+Q = 1e-8
+
+
+def test_no_fresh_usable_hint_leaves_q() -> None:
+    rn = RangeNoise(max_age=100.0)
+    rn.q_theta(np.array([1, 2]), Q, 0.0, 0.0, 0.0)
+    rn.set(1, TmaHint(0.0, 0.0, 1000.0, 10.0, 0.0, usable=False))
+    rn.set(2, TmaHint(-500.0, 0.0, 1000.0, 10.0, 0.0))  # older than max_age at t = 60
+    assert np.all(rn.q_theta(np.array([1, 2, 3]), Q, 60.0, 0.0, 0.0) == Q)
+
+
+def test_q_is_raised_by_the_bearing_acceleration_bound() -> None:
+    """a = v^2 / r_min^2 with r_min the least range over the cycle (here the CPA, 1 km)."""
+    rn = RangeNoise()
+    rn.q_theta(np.array([7]), Q, 0.0, 0.0, 0.0)
+    rn.set(7, TmaHint(0.0, -300.0, 1000.0, 10.0, 0.0))  # passes 1 km North at t = 30 s
+    q = rn.q_theta(np.array([7]), Q, 60.0, 0.0, 0.0)[0]
+    assert q == pytest.approx(Q + (10.0**2 / 1000.0**2) ** 2 * 60.0)
+    rn.forget(np.array([3]))
+    assert rn.hints == {}
+
+
+def test_hint_widens_the_prediction_never_moves_it() -> None:
+    p = TrackerParams(mode="broadband", crossing=False)
+    runs = []
+    for hint in (False, True):
+        tr = BearingTracker(p, "cylindrical", math.radians(2.0))
+        for k in range(6):
+            c = tr.step(60.0 * k, np.array([1.0 + 0.01 * k]), np.array([100.0]), 0.0, own_y=100.0 * k)
+            if hint and k == 3:
+                tr.tma_hint(int(c.ids[0]), TmaHint(60.0 * k, 1500.0, 1000.0, -8.0, 0.0))
+        c = tr.step(360.0, np.zeros(0), np.zeros(0), 0.0, own_y=600.0)  # a miss: the prediction
+        runs.append((c.x[0, 0], c.P[0, 0, 0]))
+    assert runs[1][0] == pytest.approx(runs[0][0], abs=0.02)
+    assert runs[1][1] > 2.0 * runs[0][1]
+
+
+@pytest.mark.parametrize("mode", ["gnn", "mht"])
+def test_close_approach_with_a_turn_fast_subset(mode: str) -> None:
+    """sonar_cpa_fine_1km_turn (30 s, CPA 1 km, own-ship turn), seeds 1-2: the track keeps
+    one number, TMA publishes after the approach within 5 CRLB with a NEES below 30."""
+    sys.path.insert(0, str(REPO))
+    from benchmarks.sonar_cpa import run_once
+
+    for seed in (1, 2):
+        r = run_once(REPO / "scenarios" / "sonar_cpa_fine_1km_turn.toml", seed, mode)
+        assert r.numbers == 1 and r.held >= 0.9 and r.solved_after
+        assert r.err <= 5.0 * r.crlb and r.nees < 30.0
