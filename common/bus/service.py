@@ -23,6 +23,7 @@ import numpy as np
 import zenoh
 
 from common.bus.transport import (
+    CLOSE_LINGER_S,
     LOG_EVERY,
     Envelope,
     Inbox,
@@ -41,6 +42,7 @@ from common.wire import protocol
 Handler = Callable[[str, bytes], None]
 QueryHandler = Callable[[zenoh.Query], None]
 METRICS_PERIOD_S = 2.0
+FINAL_LINGER_S = 0.1  # s the session stays open after the final counters (a status message)
 
 
 class Service:
@@ -100,6 +102,14 @@ class Service:
         self._last_put = time.monotonic()
         self.counters["out"] += 1
 
+    def _finish(self) -> None:
+        """A normal end: the last counters say so (the view shows "finished", not gone).
+        A status, not an output: it lingers FINAL_LINGER_S of its own in ``close``, not
+        the whole data linger (every exit would take CLOSE_LINGER_S longer)."""
+        last = self._last_put
+        self.publish(f"metrics/{self.name}/{self.instance}", self.metrics() | {"state": "finished"})
+        self._last_put = max(last, time.monotonic() - (CLOSE_LINGER_S - FINAL_LINGER_S))
+
     def reject(self, reason: str, detail: str, key: str) -> None:
         """Count a rejected input and log it (first time per reason, then every 1000th)."""
         self.rejected[reason] += 1
@@ -135,9 +145,7 @@ class Service:
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
             if at_end is not None:
                 self._guard("(end of input)", at_end)
-            # a normal end: the last counters say so (the view shows "finished", not gone)
-            self._guard("(end)", lambda: self.publish(f"metrics/{self.name}/{self.instance}",
-                                                      self.metrics() | {"state": "finished"}))
+            self._guard("(end)", self._finish)
         finally:
             signals.close()
             token.undeclare()
