@@ -67,7 +67,7 @@ class Run:
     err2: list[float] = field(default_factory=list)
     nees: list[float] = field(default_factory=list)
     pairs: list[tuple[float, int]] = field(default_factory=list)  # t, truth id of err2 rows
-    truth: dict[float, np.ndarray] = field(default_factory=dict)  # t -> (ids, states) rows
+    truth: dict[float, np.ndarray] = field(default_factory=dict)  # report t -> rows [id, state]
 
 
 def run_chain(cfg: Config, doc: dict[str, Any], seed: int, warm_up: float, score: bool = True) -> Run:
@@ -101,10 +101,11 @@ def run_chain(cfg: Config, doc: dict[str, Any], seed: int, warm_up: float, score
     c0 = time.process_time()
     out += chain.fusion.flush()
     run.cpu["fusion"] += time.process_time() - c0
-    if score:
-        for g in out:
-            if g.t >= warm_up and round(g.t, 9) in truth:
-                _score(run, g, truth[round(g.t, 9)], held)
+    for g in (g for g in out if score and round(g.t, 9) in truth):
+        m = truth[round(g.t, 9)]
+        run.truth[g.t] = np.column_stack([np.asarray(m["id"], dtype=float), truth_state(m)])
+        if g.t >= warm_up:
+            _score(run, g, m, held)
     return run
 
 
@@ -128,7 +129,6 @@ def _score(run: Run, g: GlobalTracks, truth: dict[str, Any], held: dict[int, int
     run.err2 += np.sum(e**2, axis=1).tolist()
     run.nees += quadratic_form(e, P[c][:, POS][:, :, POS]).tolist()
     run.pairs += [(g.t, i) for i in ids[r].tolist()]
-    run.truth[g.t] = np.column_stack([ids, X])
 
 
 def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
@@ -150,8 +150,7 @@ def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
         r_t = np.linalg.norm(states[..., POS] - b.tx, axis=-1)
         r_r = np.linalg.norm(states[..., POS] - b.rx, axis=-1)
         pd[..., i] = detection_probability(r_t, r_r, ch, radar) * (r_t + r_r <= radar.rb_max)
-    p = NetworkParams()
-    # a scored aircraft is present from the first report; its bound starts from P0 there
+    p = NetworkParams()  # the bound starts from P0 at an aircraft's first report
     J = pcrlb(times, states, present, tx, rx, np.array(info), p.q, p.q_z, P0, pd)
     var = np.trace(J[:, :, POS][:, :, :, POS], axis1=2, axis2=3)
     k = np.searchsorted(times, [t for t, _ in run.pairs])
@@ -185,6 +184,8 @@ def goals(args: argparse.Namespace) -> bool:
 
 
 def scaling(args: argparse.Namespace) -> None:
+    if not args.scale_bases:
+        return
     print(f"\nCPU s per scene s, {args.scale_aircraft} aircraft, {args.scale_duration:g} s, seed 1")
     print(f"{'bases':>5} {'plotter':>8} {'tracker':>8} {'fusion':>8}")
     rows = []
