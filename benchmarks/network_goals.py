@@ -18,6 +18,7 @@ and % beyond chi-square(3) 99 %, the fusion centre's CPU per base report and its
 x real time (scene seconds per CPU second). Then the CPU per scene second of each
 service against the number of bases (first n bases of a 16-receiver network,
 --scale-aircraft aircraft, seed 1) with the log-log slope. Exits 1 when a goal fails.
+--pd-model fixed runs the goal scenes with Bernoulli(pd) detection instead (comparison).
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from common.radar.fusion.report import GlobalTracks
 from common.radar.geometry.bistatic import POS
 from common.radar.network.params import NetworkParams
 from common.sim.radar import detection_probability
-from common.sim.radar_scenario import RadarSim
+from common.sim.radar_scenario import PD_MODELS, RadarSim
 from common.sim.scenario import load_scenario
 from common.wire.radar_chain import RadarChain
 from common.wire.radar_messages import plots_of
@@ -165,6 +166,7 @@ def goals(args: argparse.Namespace) -> bool:
     for name in args.scenes:
         for seed in args.seeds:
             doc = scene_doc(int(name), seed=seed, duration=args.duration)
+            doc["sim"]["radar"]["pd_model"] = args.pd_model
             cfg = parse(doc)
             radar = load_scenario(doc).radar
             assert radar is not None
@@ -205,6 +207,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4, 5])
     ap.add_argument("--duration", type=float, default=120.0)
     ap.add_argument("--warm-up", type=float, default=30.0)
+    ap.add_argument("--pd-model", choices=PD_MODELS, default="snr",
+                    help="detection model of the goal scenes (fixed: pd alone, for comparison)")
     ap.add_argument("--scale-bases", type=int, nargs="*", default=[4, 8, 16, 32])
     ap.add_argument("--scale-aircraft", type=int, default=100)
     ap.add_argument("--scale-duration", type=float, default=30.0)
