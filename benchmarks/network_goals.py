@@ -203,7 +203,8 @@ def scaling(args: argparse.Namespace) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--scenes", nargs="+", default=["300", "1000"], help="aircraft per scene")
+    ap.add_argument("--scenes", nargs="*", default=["300", "1000"],
+                    help="aircraft per scene (none: the cost growth alone)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4, 5])
     ap.add_argument("--duration", type=float, default=120.0)
     ap.add_argument("--warm-up", type=float, default=30.0)
@@ -215,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     ok = goals(a)
     scaling(a)
-    print("goals:", "met" if ok else "FAILED")
+    print("goals:", "not run" if not a.scenes else "met" if ok else "FAILED")
     return 0 if ok else 1
 
 
