@@ -38,7 +38,7 @@ from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker,
 from common.radar.geometry.bistatic import azimuth, bistatic_range, bistatic_range_rate
 from common.radar.plots.channel_fusion import PlotFusion, Plots
 from common.sim.radar import radar_plots
-from common.sim.scenario import RadarChannelSim, RadarSim
+from common.sim.radar_scenario import RadarChannelSim, RadarSim
 from common.sim.simulator import load_scenario
 from common.wire.sim_messages import run_scenario
 

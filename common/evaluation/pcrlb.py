@@ -53,9 +53,11 @@ def channel_information(pd: np.ndarray, srb: np.ndarray, svb: np.ndarray,
 def pcrlb(
     times: np.ndarray, states: np.ndarray, present: np.ndarray, tx: np.ndarray,
     rx: np.ndarray, info: np.ndarray, q: float, q_z: float, P0: np.ndarray,
+    pd: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bounds (K, N, 6, 6) for truth states (K, N, 6) [x vx y vy z vz] at times (K,),
-    present (K, N); tx, rx (B, 3); info (B, 3, 3). NaN where a target is absent."""
+    present (K, N); tx, rx (B, 3); info (B, 3, 3), scaled per target by pd (K, N, B)
+    when given (a P_D that depends on the geometry). NaN where a target is absent."""
     K, N, _ = states.shape
     out = np.full((K, N, 6, 6), np.nan)
     J = np.zeros((N, 6, 6))
@@ -72,7 +74,8 @@ def pcrlb(
         alive = on
         for b in range(tx.shape[0]):
             G = project_jacobian(states[k, on], tx[b], rx[b])
-            J[on] += np.swapaxes(G, 1, 2) @ info[b] @ G
+            Ib = info[b] if pd is None else pd[k, on, b][:, None, None] * info[b]
+            J[on] += np.swapaxes(G, 1, 2) @ Ib @ G
         out[k, on] = np.linalg.inv(J[on])
     return out
 

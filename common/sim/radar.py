@@ -10,20 +10,38 @@ are uniform in the window, their number Poisson distributed.
 SNR (dB) of a target plot follows the bistatic radar equation, SNR ~ 1/(R_T R_R)^2:
 ``snr_db - 20 log10(R_T R_R / snr_ref_range^2)`` plus Gaussian noise, floored at the
 detection threshold; false plots have ``threshold + Exponential(clutter_snr_db)``.
-Detection is Bernoulli(pd), independent of SNR (a simplification that keeps pd a
-single configured number).
+Detection (pd_model): "fixed", Bernoulli(pd) independent of SNR; "snr", the SNR before
+the floor exceeds the threshold and Bernoulli(pd) (pd a ceiling), so that
+P_D = pd Phi((snr_db - 20 log10(R_T R_R / snr_ref_range^2) - threshold) / snr_sigma_db)
+(`detection_probability`). Both draw the same numbers: "fixed" runs are unchanged.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import ndtr
 
 from common.core.angles import TWO_PI, wrap_2pi
 from common.deploy.config import RadarBase
 from common.radar.geometry.bistatic import azimuth, bistatic_range_rate
-from common.sim.scenario import RadarChannelSim, RadarSim
+from common.sim.radar_scenario import RadarChannelSim, RadarSim
 
 COLUMNS = ("rb", "vb", "az", "srb", "svb", "saz", "snr")
+
+
+def mean_snr(r_t: np.ndarray, r_r: np.ndarray, ch: RadarChannelSim, radar: RadarSim) -> np.ndarray:
+    """Mean SNR (dB) of targets at distances r_t, r_r (m) from transmitter and receiver."""
+    with np.errstate(divide="ignore"):
+        return ch.snr_db - 20.0 * np.log10(r_t * r_r / radar.snr_ref_range**2)
+
+
+def detection_probability(r_t: np.ndarray, r_r: np.ndarray, ch: RadarChannelSim,
+                          radar: RadarSim) -> np.ndarray:
+    """P_D of targets inside the window under radar.pd_model (module doc)."""
+    if radar.pd_model == "fixed":
+        return np.full(np.shape(r_t), ch.pd)
+    excess = mean_snr(r_t, r_r, ch, radar) - radar.snr_threshold_db
+    return ch.pd * ndtr(excess / max(radar.snr_sigma_db, 1e-12))
 
 
 def radar_plots(
@@ -44,9 +62,10 @@ def radar_plots(
     n = len(rb)
     noise = rng.standard_normal((n, 4))
     det = (rng.random(n) < ch.pd) & (rb <= radar.rb_max) & (np.abs(vb) <= radar.vb_max)
-    with np.errstate(divide="ignore"):
-        snr = ch.snr_db - 20.0 * np.log10(r_t * r_r / radar.snr_ref_range**2)
-    snr = np.maximum(snr + radar.snr_sigma_db * noise[:, 3], radar.snr_threshold_db)
+    snr = mean_snr(r_t, r_r, ch, radar) + radar.snr_sigma_db * noise[:, 3]
+    if radar.pd_model == "snr":
+        det &= snr > radar.snr_threshold_db
+    snr = np.maximum(snr, radar.snr_threshold_db)
     k = rng.poisson(ch.clutter)
     vb_max, thr = radar.vb_max, radar.snr_threshold_db
     out = {

@@ -111,3 +111,18 @@ def test_joint_pairs_score_a_truth_against_its_own_track() -> None:
     joint = ev.after(0.0, ev.metrics.joint_associations())[1]
     assert step[:, 1].max() > 1000.0  # track 8 against truth 1: (1000 / 30)^2
     assert joint.shape[0] == 6 and np.allclose(joint[:, 1], 2.25)  # (1500 / 1000)^2
+
+
+def test_per_target_pd_scales_each_base_information() -> None:
+    t, s = _trajectory(20)
+    present = np.ones((20, 2), dtype=bool)
+    info = np.stack([channel_information(np.ones(1), np.array([300.0]), np.array([0.5]),
+                                         np.array([np.inf]))] * 3)
+    P0 = np.diag([1e8, 1e4, 1e8, 1e4, 1e8, 1e4])
+    pd = np.full((20, 2, 3), 0.7)
+    np.testing.assert_allclose(pcrlb(t, s, present, TX, RX, info, 1.0, 0.25, P0, pd),
+                               pcrlb(t, s, present, TX, RX, 0.7 * info, 1.0, 0.25, P0), rtol=1e-9)
+    pd[:, 1, 2] = 0.0  # base 3 never sees the second target: as if it had no base 3
+    B = pcrlb(t, s, present, TX, RX, info, 1.0, 0.25, P0, pd)
+    B2 = pcrlb(t, s, present, TX[:2], RX[:2], 0.7 * info[:2], 1.0, 0.25, P0)
+    np.testing.assert_allclose(B[:, 1], B2[:, 1], rtol=1e-9)
