@@ -110,7 +110,7 @@ async def _feed(page: Page, hub: Hub) -> None:
 
 async def websocket(request: web.Request) -> web.WebSocketResponse:
     """One page: its feed runs beside this loop, which reads the page's acks."""
-    hub: Hub = request.app["hub"]
+    hub: Hub = request.app[HUB]
     ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096, compress=False,
                                timeout=CLOSE_TIMEOUT_S)
     await ws.prepare(request)
@@ -141,18 +141,21 @@ async def static(request: web.Request) -> web.Response:
 
 async def stats(request: web.Request) -> web.Response:
     """The server's counters as JSON (pages, messages and bytes sent, input counters)."""
-    return web.Response(text=json.dumps(request.app["hub"].stats()), content_type="application/json")
+    return web.Response(text=json.dumps(request.app[HUB].stats()), content_type="application/json")
 
 
 async def _close_pages(a: web.Application) -> None:
     """On shutdown: close every page's socket (a stalled one within CLOSE_TIMEOUT_S)."""
     await asyncio.gather(*(ws.close(code=WSCloseCode.GOING_AWAY, message=b"view stopped")
-                           for ws in [p.ws for p in a["hub"].pages]), return_exceptions=True)
+                           for ws in [p.ws for p in a[HUB].pages]), return_exceptions=True)
+
+
+HUB = web.AppKey("hub", Hub)  # the application's one hub
 
 
 def app(hub: Hub) -> web.Application:
     a = web.Application()
-    a["hub"] = hub
+    a[HUB] = hub
     a.on_shutdown.append(_close_pages)
     a.add_routes([web.get("/", static), web.get("/ws", websocket), web.get("/stats", stats),
                   web.get("/{name}", static)])
