@@ -25,7 +25,7 @@ import zenoh
 
 from common.bus.transport import Inbox, open_session
 from common.cli import add_common, load_config
-from common.core.angles import TWO_PI
+from common.core.angles import TWO_PI, wrap_2pi
 from common.core.params import ParamError
 from common.deploy.sections import array_bounds
 from common.sonar.tma.bearings_only import Support
@@ -92,7 +92,7 @@ def _rad(deg: float | None) -> float | None:
     if deg is None:
         return None
     r = math.radians(deg)
-    return r if 0.0 <= r <= TWO_PI else r % TWO_PI
+    return r if 0.0 <= r <= TWO_PI else float(wrap_2pi(r))
 
 
 def main(args: argparse.Namespace) -> int:
