@@ -106,7 +106,7 @@ def main(args: argparse.Namespace) -> int:
     with open_session(cfg.zenoh) as session:
         subs = [session.declare_subscriber(f"{root}/sonar/tma/{k}", inbox.on_sample)
                 for k in (arr.id, f"ack/{arr.id}")]
-        birth, t = args.birth, args.at if args.op == "support" else None
+        birth, t = args.birth, args.at if args.op == "support" else 0.0
         if birth is None or t is None:
             latest = _next(inbox, f"{root}/sonar/tma/{arr.id}", "tma", deadline)
             if latest is None:
