@@ -117,7 +117,7 @@ def main(args: argparse.Namespace) -> int:
     def on_bounds(msg: dict[str, Any]) -> Accepted | None:
         b, track = bounds_from(msg)
         mgr.set_bounds(b, track, msg.get("birth"))
-        return None if track is None else mgr.inputs.resolve(track, msg.get("birth"))
+        return None if track is None else Accepted(track, mgr.inputs.birth[track])
 
     def on_support(msg: dict[str, Any]) -> Accepted:
         track, s = support_from(msg)
