@@ -40,7 +40,7 @@ from common.bus.procs import Child, pfusion_argv
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, load_config
 from common.cli import main as cli_main
-from common.deploy.acl import access_control, grants, router_identity, site_identity
+from common.deploy.acl import access_control, grants, identity_of, router_identity, site_identity
 from common.deploy.config import Config, ConfigError, ZenohConfig, load
 from common.deploy.deployment import plan
 from common.sim.scenario import load_scenario
@@ -200,7 +200,8 @@ def test_generated_access_control(tmp_path: Path) -> None:
     assert get["viewer"] == {"radar/gtracks", "sonar/btracks/a1", "sonar/btracks/a2",
                              "sonar/tma/a1", "sonar/tma/a2", *(k for k in KEYS if "metrics" in k)}
     assert get["analyst"] == set(KEYS)
-    # pfusion tma-input reads the births of the tma messages and the acks
+    # pfusion tma-input (identity operator-tma) reads the births of the tma messages and the acks
+    assert identity_of("tma-input", array="a1") == "operator-tma"
     assert get["operator-tma"] == {"sonar/tma/a1", "sonar/tma/a2", "sonar/tma/ack/a1", "sonar/tma/ack/a2"}
     assert allowed(acl, "tma-a1", "egress", "put", f"{ROOT}/sonar/tma/clear/a1")
     assert not allowed(acl, "tma-a1", "egress", "put", f"{ROOT}/sonar/tma/clear/a2")
