@@ -27,6 +27,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "params": ("services.params.main", "print the configuration reference or check a file"),
     "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
     "tma": ("services.tma.main", "target motion analysis of one array's confirmed bearing tracks (002, 003)"),
+    "tma-input": ("services.tma_input.main",
+                  "an operator's TMA bounds or support values for one bearing track, acknowledged"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
     "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
     "run": ("services.run.main", "start every service of a deployment, restart crashed ones"),
@@ -54,6 +56,8 @@ EXAMPLES: dict[str, str] = {
     "params": "pfusion params --check scenarios/two_targets.toml",
     "bearing-tracker": "pfusion bearing-tracker --config scenarios/sonar_tma.toml --array a1",
     "tma": "pfusion tma --config scenarios/sonar_tma.toml --array a1",
+    "tma-input": "pfusion tma-input bounds --config scenarios/sonar_tma.toml --array a1 --track 1 "
+                 "--course-min 200 --course-max 300 --speed-min 2 --speed-max 6",
     "channel-plotter": "pfusion channel-plotter --config scenarios/two_targets.toml --base b1",
     "elementary-tracker": "pfusion elementary-tracker --config scenarios/two_targets.toml --base b1",
     "run": "pfusion run --config scenarios/two_targets.toml --with-router",
