@@ -36,7 +36,7 @@ from tests.harness import REPO, ROOT, SCENARIOS, Deployment
 
 TWO_TARGETS = SCENARIOS / "two_targets.toml"
 OUT = REPO / "out"
-CONFIRMED_RGB = (0x66, 0xBB, 0x6A)  # view.js COLOURS.confirmed
+CONFIRMED_RGB = (0x56, 0xB4, 0xE9)  # palette.js PALETTE.confirmed
 DEAD_RGB = "rgb(198, 40, 40)"       # view.css tr.dead
 
 
