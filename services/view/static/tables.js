@@ -94,7 +94,7 @@ function details(k) {
     `bases     ${k.et.map((t) => `${t[0]} (etrack ${t[1]})`).join(", ") || "none"}`,
     `etracks   ${k.et.map((t) => `${t[0]}:${t[1]}`).join(" ") || "none"}`,
     `score     ${k.score}`,
-    `history   ${k.n} updates, trail ${k.trail.length} points; newest first:`,
+    `history   ${k.n} updates drawn, trail ${k.trail.length} points; last updates, newest first:`,
     `      t s        x ${unit}      y ${unit}      z ${unit}  ${vunit.padStart(6)}  course  status`,
     ...h.map((r) => `${num(r[0], 1).padStart(8)} ${dist(r[1]).padStart(9)} ${dist(r[2]).padStart(9)} ` +
       `${dist(r[3]).padStart(9)} ${spd(r[4]).padStart(7)} ${num(r[5], 0).padStart(7)}  ${r[6]}`),
