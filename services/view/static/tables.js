@@ -28,10 +28,11 @@ function remember(g) {       // once per new gtracks message (not on redraws)
   [...hist.keys()].forEach((id) => { if (!live.has(id)) hist.delete(id); });
 }
 
-// Rows [{key, cells, sortv: {col: value}, ...}] sorted and filtered by sorts[which]
+// Rows [{key, cells: () => texts, sortv: {col: value}, ...}] sorted and filtered by
+// sorts[which]; cells are formatted only for the rows filtered or shown (10^4 tracks)
 function arrange(which, rows) {
   const s = sorts[which], f = s.filter.trim().toLowerCase();
-  const kept = f ? rows.filter((r) => r.cells.join(" ").toLowerCase().includes(f)) : rows.slice();
+  const kept = f ? rows.filter((r) => r.cells().join(" ").toLowerCase().includes(f)) : rows.slice();
   const v = (r) => r.sortv[s.key];
   kept.sort((a, b) => {
     const x = v(a), y = v(b);
@@ -49,7 +50,7 @@ function fillTable(which, body, rows, more, onClick) {
     const tr = document.createElement("tr");
     Object.assign(tr.dataset, r.data);
     tr.className = r.cls;
-    r.cells.forEach((c) => { const td = document.createElement("td"); td.textContent = c; tr.appendChild(td); });
+    r.cells().forEach((c) => { const td = document.createElement("td"); td.textContent = c; tr.appendChild(td); });
     tr.addEventListener("click", () => onClick(r.key));
     return tr;
   }));
@@ -67,7 +68,7 @@ function trackTable(tracks) {
       key: k.id,
       data: { id: k.id, status: k.status, x: k.x[0], y: k.x[2] },
       cls: `status-${k.status}${k.amb ? " ambiguous" : ""}${k.id === selected ? " selected" : ""}`,
-      cells: [k.id, k.status, dist(k.x[0]), dist(k.x[2]), dist(k.x[4]), spd(sp), num(co, 0), bases.join(" ")],
+      cells: () => [k.id, k.status, dist(k.x[0]), dist(k.x[2]), dist(k.x[4]), spd(sp), num(co, 0), bases.join(" ")],
       sortv: { id: k.id, status: k.status, x: k.x[0], y: k.x[2], z: k.x[4], speed: sp, course: co, bases: bases.join(" ") },
     };
   });
@@ -113,7 +114,7 @@ function sonarRows() {
       rows.push({
         key, data: { key, array: a, id, status },
         cls: `status-${status}${key === selectedSonar ? " selected" : ""}`,
-        cells: [`${a}/${id}`, status, num(last[1], 1), num(last[0], 1), dist(range),
+        cells: () => [`${a}/${id}`, status, num(last[1], 1), num(last[0], 1), dist(range),
           sol ? num(sol.course, 0) : "-", sol ? spd(sol.speed, 1) : "-"],
         sortv: { id: key, status, brg: last[1], t: last[0], range, course: sol ? sol.course : NaN,
           speed: sol ? sol.speed : NaN },
