@@ -378,6 +378,8 @@ def test_view_stays_responsive_and_bounded_whatever_the_data(browser: Any, tmp_p
         wait("the page's socket", lambda: browser.execute_script("return wsOpen"), 30)
         for suffix, msg in sonar_messages()[:3]:  # own ship and the waterfall
             d.session.put(f"{ROOT}/{suffix}", protocol.encode(msg))
+        wait("own ship in the view before the TMA", lambda: browser.execute_script(
+            "return (topics['waterfall/a1'] || {rows: []}).rows.length === 3"), 30)
         d.session.put(f"{ROOT}/sonar/tma/a1", protocol.encode(unobservable_tma(3e5, 1e11)))
         d.session.put(f"{ROOT}/radar/gtracks", gtracks_msg(10.0, [
             (1, [20e3, 200.0, 30e3, 0.0, 9e3, 0.0], 2500.0),
