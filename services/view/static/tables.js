@@ -80,6 +80,7 @@ function trackTable(tracks) {
 function details(k) {
   const el = $("details");
   el.dataset.id = k ? k.id : "";
+  el.dataset.sonar = "";
   if (selectedSonar !== null && selected === null) { sonarDetails(el); return; }
   if (!k) { el.textContent = selected === null ? "none: click a track on the plan or in a list" : `track ${selected} is gone`; return; }
   const s = k.sig, x = k.x, e = k.ell || [null, null];
