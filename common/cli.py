@@ -17,6 +17,7 @@ import re
 import signal
 import sys
 
+from common.bus import RESTART
 from common.deploy.config import Config, ConfigError, load
 
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -156,7 +157,9 @@ def main(argv: list[str] | None = None) -> int:
     # a test's capture, without a file descriptor)
     faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
     try:
-        return int(module.main(args) or 0)
+        while (code := int(module.main(args) or 0)) == RESTART:  # a reset command (common.bus.service)
+            pass
+        return code
     except ConfigError as e:
         print(f"pfusion {pre.command}: {e}", file=sys.stderr)
         return 2

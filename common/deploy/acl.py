@@ -100,10 +100,11 @@ def router_identity(site_id: str) -> str:
 
 
 def _service(command: str, instance: str, out: list[str], inputs: list[str]) -> Grant:
-    """A service: its outputs, its metrics key and its liveliness token."""
+    """A service: its outputs, its metrics key, its liveliness token and its control
+    queryable (common.bus.control)."""
     name = token_name(command)
     return Grant(publish=[*out, f"metrics/{name}/{instance}"], subscribe=inputs,
-                 tokens=[f"alive/{name}/{instance}"])
+                 tokens=[f"alive/{name}/{instance}"], serve=[f"control/{name}/{instance}"])
 
 
 def grants(cfg: Config) -> dict[str, Grant]:
@@ -125,7 +126,7 @@ def grants(cfg: Config) -> dict[str, Grant]:
     for a in cfg.arrays:
         bt = g[f"bearing-tracker-{a.id}"] = _service(
             "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"], [f"sonar/detections/{a.id}"])
-        bt.serve = [f"sonar/history/{a.id}/*"]
+        bt.serve.append(f"sonar/history/{a.id}/*")
         tma = g[f"tma-{a.id}"] = _service(
             "tma", a.id, [f"sonar/tma/{a.id}", f"sonar/tma/ack/{a.id}"],
             [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}",
@@ -137,6 +138,7 @@ def grants(cfg: Config) -> dict[str, Grant]:
     g[OPERATOR_TMA] = Grant(publish=list(OPERATOR_TMA_PUTS),
                             subscribe=["sonar/tma/*", "sonar/tma/ack/*"])
     g[SIMULATOR] = Grant(publish=["radar/plots/**", "sonar/detections/**", "sim/**"],
+                         query=["control/**"],  # replay: which services are ahead, --reset
                          tokens=["alive/simulate/*"], watch_alive=True)
     return g
 
