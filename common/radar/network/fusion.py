@@ -17,8 +17,9 @@ time t (no common scan time):
   4. one batched EKF update (001 [55]-[62], common.core.kalman) of the tracks hit;
   5. bookkeeping: a cycle with updates from >= 3 bases over >= 2 receivers counts one
      hit, confirm_cycles hits confirm; deletion after coast (coast_tentative) s;
-  6. every init_period s, initiation (common.radar.network.initiation) on the
-     leftovers of all bases predicted to t; a candidate inside the gate of an
+  6. every init_period s, two confirmed tracks of one aircraft merged
+     (common.radar.network.duplicates), then initiation (common.radar.network.initiation)
+     on the leftovers of all bases predicted to t; a candidate inside the gate of an
      existing track is not opened;
   7. every report_period s, a `NetworkReport` of all live tracks predicted to t.
 """
@@ -41,6 +42,7 @@ from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.decorrelation import Decorrelator
 from common.radar.geometry.bistatic import BaseGeometry, project, project_jacobian
 from common.radar.network.clocks import Clocks
+from common.radar.network.duplicates import candidate_pairs, merged
 from common.radar.network.initiation import Leftovers, Sites, initiate
 from common.radar.network.params import NetworkParams
 from common.radar.network.tracks import Tracks
@@ -64,7 +66,8 @@ class NetworkReport:
 
 class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
-    `waiting` the seed cells deferred by max_cells."""
+    `waiting` the seed cells deferred by max_cells, `merged` the tracks merged into
+    another."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None,
                  sigma_gamma: float = 5.0, sigma_omega: float = 1e-3) -> None:
@@ -89,6 +92,7 @@ class NetworkFusion:
         self.rejected: dict[str, int] = {}
         self.waiting = 0
         self.rounds = 0
+        self.merged = 0
 
     def _reject(self, reason: str, detail: str) -> Rejected:
         self.rejected[reason] = self.rejected.get(reason, 0) + 1
@@ -163,15 +167,17 @@ class NetworkFusion:
         T.bookkeep(t)
         if t - self.last_init >= self.p.init_period:
             self.last_init = t
+            self._merge(t)
             self._initiate(t)
         return self._report(t)
 
-    def _leftovers(self, t: float) -> Leftovers:
-        """Confirmed non-member elementary tracks of fresh reports, [r_b, v_b] at t."""
+    def _leftovers(self, t: float, members: bool = False) -> Leftovers:
+        """Confirmed non-member (`members`: member) elementary tracks of fresh reports,
+        [r_b, v_b] at t."""
         parts = []
         for b, tr in self.last.items():
             dt = t - tr.t
-            keep = (tr.status == Status.CONFIRMED) & ~self.tracks.is_member(b, tr.id)
+            keep = (tr.status == Status.CONFIRMED) & (self.tracks.is_member(b, tr.id) == members)
             if dt > self.p.stale or not keep.any():
                 continue
             F = bistatic_F(dt)[:3, :3]
@@ -183,6 +189,28 @@ class NetworkFusion:
             return Leftovers(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)),
                              np.zeros((0, 2, 2)))
         return Leftovers(*(np.concatenate(c) for c in zip(*parts)))
+
+    def _merge(self, t: float) -> None:
+        """Step 6's merge (common.radar.network.duplicates)."""
+        T = self.tracks
+        if self.p.merge_distance <= 0 or len(T) < 2:
+            return
+        xp, _ = T.predicted(t)
+        pairs = candidate_pairs(xp, T.status, T.members, self.p.merge_distance)
+        if pairs.shape[0] == 0:
+            return
+        fix, ok = merged(pairs, xp, T.members, self._leftovers(t, members=True), self.sites,
+                         self.p)
+        gone = np.zeros(len(T), dtype=bool)
+        used: set[int] = set()
+        for k in np.flatnonzero(ok).tolist():
+            a, c = pairs[k].tolist()
+            if not used & {a, c}:
+                used |= {a, c}
+                T.absorb(a, c, t, fix.x[k], fix.P[k])
+                gone[c] = True
+        self.merged += int(gone.sum())
+        T.remove(gone)
 
     def _initiate(self, t: float) -> None:
         """Step 6 (common.radar.network.initiation)."""

@@ -75,9 +75,10 @@ def _closest(pred: np.ndarray, half: np.ndarray, left: Leftovers, rows: np.ndarr
     return out
 
 
-def _fix(left: Leftovers, sites: Sites, members: np.ndarray, seeds: np.ndarray,
+def localise_members(left: Leftovers, sites: Sites, members: np.ndarray, seeds: np.ndarray,
          p: NetworkParams) -> Fix:
-    """`localise` of candidates with members (C, B) (leftover index or -1)."""
+    """`localise` of candidates with members (C, B) (leftover index or -1) from seeds
+    (C, S, 3)."""
     valid = members >= 0
     m = np.where(valid, members, 0)
     B = members.shape[1]
@@ -116,7 +117,7 @@ def _regate(fix: Fix, left: Leftovers, sites: Sites, p: NetworkParams) -> np.nda
     return out
 
 
-def _accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: NetworkParams
+def accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: NetworkParams
               ) -> np.ndarray:
     """Step 4's tests: (C,) mask."""
     n = (members >= 0).sum(axis=1)
@@ -148,10 +149,10 @@ def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, tur
     pts = pts[keep][first]
     seeds = np.repeat(pts[:, None, :], 1 + len(p.seed_z), axis=1)
     seeds[:, 1:, 2] = p.seed_z
-    fix = _fix(left, sites, members, seeds, p)
+    fix = localise_members(left, sites, members, seeds, p)
     members = _regate(fix, left, sites, p)
-    fix = _fix(left, sites, members, fix.x[:, None, [0, 2, 4]], p)
-    ok = _accepted(fix, members, sites, required, p)
+    fix = localise_members(left, sites, members, fix.x[:, None, [0, 2, 4]], p)
+    ok = accepted(fix, members, sites, required, p)
     n = (members >= 0).sum(axis=1)
     per_dof = fix.chi2 / np.maximum(2 * n - 6, 1)
     taken: set[int] = set()

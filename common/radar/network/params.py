@@ -41,6 +41,8 @@ class NetworkParams(Params):
         confirm.
     coast, coast_tentative: time without update before deletion (confirmed, tentative).
     report_period: period of the global track reports.
+    merge_distance: plane distance within which two confirmed tracks with disjoint bases
+        are tested as one aircraft's (common.radar.network.duplicates); 0: never.
     """
 
     window: float = 2.0
@@ -68,6 +70,7 @@ class NetworkParams(Params):
     coast: float = 5.0
     coast_tentative: float = 2.0
     report_period: float = 1.0
+    merge_distance: float = 10e3
 
     RANGES: ClassVar[dict[str, Range]] = {
         "window": non_negative("s"), "decor_gate": positive("chi-square"),
@@ -80,6 +83,7 @@ class NetworkParams(Params):
         "cell_coarse": positive("m"), "cell_fine": positive("m"), "max_cells": count(1),
         "max_sigma": positive("m"), "cycle": positive("s"), "confirm_cycles": count(1),
         "coast": positive("s"), "coast_tentative": positive("s"), "report_period": positive("s"),
+        "merge_distance": non_negative("m"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
         order("z_min", "z_max"), order("cell_fine", "cell_coarse", strict=False),

@@ -139,7 +139,11 @@ class Tracks:
         too_old = tent & (t - self.born > (p.confirm_cycles + 2) * p.cycle)
         k = np.sqrt(chi2_gate(p.gate_prob, 1))
         below = self.x[:, 4] + k * np.sqrt(self.P[:, 4, 4]) < p.z_min
-        dead = (live & (idle > p.coast)) | (tent & (idle > p.coast_tentative)) | too_old | below
+        self.remove((live & (idle > p.coast)) | (tent & (idle > p.coast_tentative)) | too_old
+                    | below)
+
+    def remove(self, dead: np.ndarray) -> None:
+        """Delete the rows of mask `dead` (N,), releasing their members."""
         for r in np.flatnonzero(dead)[::-1].tolist():
             for b, e in list(self.members[r].items()):
                 self._release(b, e)
@@ -147,3 +151,14 @@ class Tracks:
         keep = ~dead
         for name in ("id", "status", "x", "P", "t", "t_update", "born", "hits", "cycle_start"):
             setattr(self, name, getattr(self, name)[keep])
+
+    def absorb(self, keep: int, gone: int, t: float, x: np.ndarray, P: np.ndarray) -> None:
+        """Row `keep` takes state (x, P) at t and the members of row `gone` on the bases
+        it does not hold; `gone` is left for `remove`."""
+        for b, e in list(self.members[gone].items()):
+            if b not in self.members[keep]:
+                self.owner.pop((b, e), None)
+                self.misses.pop((b, e), None)
+                self.members[gone].pop(b)
+                self.add_member(keep, b, e)
+        self.x[keep], self.P[keep], self.t[keep] = x, P, t
