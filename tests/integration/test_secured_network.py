@@ -26,8 +26,10 @@ loss each way: tests/netem.py where the kernel has no sch_netem). One test, in o
    console (its line in [zenoh.tls.hosts], its password); a rolling restart of the
    three routers (fusion first, each when the previous one's clients are back) while
    the simulators run. Afterwards site2's analyst session, connected before, receives
-   nothing; every other process goes on without a restart; the elementary tracks lost
-   during the roll are counted and bounded (ROLL_LOSS_MAX scans per base).
+   nothing, and a new one with the old password is refused; every other process goes
+   on without a restart; the elementary tracks lost during the roll are counted and
+   bounded (ROLL_LOSS_MAX scans per base), and none is lost outside the cut (b3) and
+   the restarts (the impaired link loses nothing).
 
 The numbers go to out/secured_network.json (and docs/security.md, "Tested end to end").
 """
