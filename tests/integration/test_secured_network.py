@@ -93,7 +93,9 @@ def doc_steps() -> list[Step]:
             if not info or info[0] != "sh":
                 continue
             assert len(info) >= 2 and info[1] in ("ca", *HOSTS), f"sh block without a host: {info}"
-            steps.append(Step(info[1], info[2:] == ["service"], part, textwrap.dedent(m.group(3))))
+            body = textwrap.dedent(m.group(3))
+            assert body.startswith(f"# {info[1]}"), f"the first line must name the host: {body}"
+            steps.append(Step(info[1], info[2:] == ["service"], part, body))
     return steps
 
 
@@ -321,7 +323,9 @@ def test_secured_deployment_from_the_docs_under_impairment_cut_forgery_and_rotat
         for i, st in enumerate(x for x in steps if x.part == "deploy"):
             phase(f"step {i} ({st.host})")
             if st.service:
-                for line in (x for x in st.body.splitlines() if x.strip()):
+                first, *lines = st.body.splitlines()
+                assert first == f"# {st.host}: services", first
+                for line in (x for x in lines if x.strip()):
                     s.service(st.host, line)
                 continue
             if st.host != "ca" and not fed:
