@@ -107,8 +107,12 @@ class Secured:
         self.ca = tmp / "ca"
         self.ca.mkdir()
         self.net = Topology(tmp / "logs")
-        self.net.add_site("site1", 1, impaired=True)
-        self.net.add_site("site2", 2)
+        try:
+            self.net.add_site("site1", 1, impaired=True)
+            self.net.add_site("site2", 2)
+        except BaseException:
+            self.net.close()
+            raise
         self.routers: dict[str, tuple[list[str], NsProcess]] = {}
         self.services: list[str] = []  # their log names
         self.collectors: dict[str, Collector] = {}
