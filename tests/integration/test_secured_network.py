@@ -396,7 +396,8 @@ def test_secured_deployment_from_the_docs_under_impairment_cut_forgery_and_rotat
             p = s.net.start(host, pfusion_argv(*argv), f"{host}-router-2")
             s.routers[host] = (argv, p)
             s.wait(lambda: "router listening" in s.log(f"{host}-router-2"), f"{host} router back")
-            s.wait(lambda: all(any(at > t_down for at, _ in arrivals(fusion, f"radar/etracks/{b}"))
+            t_up = time.time()  # what arrives from now on went through the new router
+            s.wait(lambda: all(any(at > t_up for at, _ in arrivals(fusion, f"radar/etracks/{b}"))
                                for b in ("b1", "b2", "b3")), f"every base back after {host}", 60.0)
             windows.append((t_scan_down, latest_t(fusion)))
             per_router[host] = {"back_s": round(time.time() - t_down, 1), "etracks_lost": {
