@@ -10,7 +10,9 @@ is 198.18.i.1/30, the hub's end of its link 198.18.i.2/30, and the hub's service
 ``HUB_ADDRESS`` (on its ``lo``) is routed through each site's link.
 
 Namespaces and links are named ``pf<pid>...`` (unique per test run) and deleted by
-:meth:`Topology.close`, which also stops every process started in them.
+:meth:`Topology.close`, which also stops every process started in them. A test that
+needs them calls :func:`require`: it skips where they cannot be made, and fails there
+when ``CI`` is set (``.ci/run`` sets ``CI=true``: in CI these tests must run).
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 from common.bus.procs import Child
 
@@ -55,6 +59,18 @@ def unavailable() -> str | None:
     except RuntimeError as e:
         return f"cannot create a network namespace with a veth pair: {e}"
     return None
+
+
+def require() -> None:
+    """Skip the calling test where namespaces cannot be made (the reason printed), or
+    fail it there when the environment variable ``CI`` is set (not empty, not 0/false)."""
+    reason = unavailable()
+    if reason is None:
+        return
+    if os.environ.get("CI", "").lower() not in ("", "0", "false", "no"):
+        pytest.fail(f"CI is set but {reason}: namespace tests must run in CI", pytrace=False)
+    print(f"SKIPPED namespace test: {reason}", file=sys.stderr)
+    pytest.skip(reason)
 
 
 def kernel_netem(ns: str, dev: str) -> bool:

@@ -7,7 +7,9 @@ timestamp, which the first router on its path (the publisher's own router) sets 
 the sample enters the network (None if it has none). All namespaces share the kernel's
 clock, so times taken on different hosts compare directly. The collector declares
 ``<root>/alive/test/<name>`` once subscribed (the simulators wait for it) and stops on
-SIGTERM.
+SIGTERM. In a secured deployment (tests/integration/test_secured_network.py) it logs in
+with ``--config F --identity NAME`` (the file's [zenoh.auth] / [zenoh.tls]) and declares
+``--token`` instead (an identity may declare only its own tokens).
 
 ``python -m tests.remote_collector --connect tcp/127.0.0.1:7447 --name c1 KEYEXPR...``
 """
@@ -15,6 +17,8 @@ SIGTERM.
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import queue
 import sys
 import time
@@ -23,7 +27,7 @@ import msgpack
 import zenoh
 
 from common.bus.transport import open_session, stop_on_signals
-from common.deploy.config import ZenohConfig
+from common.deploy.config import ZenohConfig, load
 
 Item = tuple[float, float | None, str, bytes]
 
@@ -34,7 +38,14 @@ def main() -> int:
     p.add_argument("--connect", required=True)
     p.add_argument("--name", required=True)
     p.add_argument("--root", default="pf/v1")
+    p.add_argument("--config", help="deployment file whose security tables apply")
+    p.add_argument("--identity", help="Zenoh username under the file's [zenoh.auth]")
+    p.add_argument("--token", help="liveliness token under the root (default alive/test/NAME)")
     args = p.parse_args()
+    zc = ZenohConfig([args.connect], [], args.root)
+    if args.config:
+        zc = dataclasses.replace(load(args.config).zenoh, connect=[args.connect],
+                                 identity=args.identity)
     stop = stop_on_signals()
     q: queue.Queue[Item] = queue.Queue()  # not SimpleQueue: see common.bus.transport.Inbox
 
@@ -43,10 +54,12 @@ def main() -> int:
         q.put((time.time(), ts.get_time().timestamp() if ts is not None else None,
                str(s.key_expr), s.payload.to_bytes()))
 
-    out = sys.stdout.buffer
-    with open_session(ZenohConfig([args.connect], [], args.root)) as session:
+    out = os.fdopen(os.dup(1), "wb")  # the samples; Zenoh's own log (RUST_LOG) goes to
+    os.dup2(2, 1)                      # stdout: sent to stderr instead
+    with open_session(zc) as session:
         subs = [session.declare_subscriber(f"{args.root}/{k}", on_sample) for k in args.keyexpr]
-        token = session.liveliness().declare_token(f"{args.root}/alive/test/{args.name}")
+        token = session.liveliness().declare_token(
+            f"{args.root}/{args.token or f'alive/test/{args.name}'}")
         while not stop.is_set():
             try:
                 item: Item | None = q.get(timeout=0.1)

@@ -739,6 +739,31 @@ def test_operator_tma_sets_bounds_a_viewer_cannot(secure: Secure) -> None:
     assert keys == [f"{ROOT}/sonar/tma/support/a1", f"{ROOT}/sonar/tma/bounds/a1"]
 
 
+def test_site_feed_tool_logs_in_as_its_site(secure: Secure) -> None:
+    """docs/security.md step 6: ``pfusion ingest csv ... --identity site-rx1`` (a
+    receiver's feed tool) publishes its site's plots (b1); a row of another site's base
+    (b2) never arrives."""
+    now = time.time()
+    feed = secure.dir / "feed.csv"
+    feed.write_text("t,base,channel,rb_m,vb_mps,srb_m,svb_mps\n" + "".join(
+        f"{now + i:.3f},{b},c1,{20000 + 100 * i},50,100,2\n" for i in range(3) for b in ("b2", "b1")))
+    listener = Listener(zc(secure, "analyst"))
+    try:
+        time.sleep(0.5)
+        r = subprocess.run(pfusion_argv("ingest", "csv", str(feed), "--config", str(secure.config),
+                                        "--connect", secure.endpoint, "--identity",
+                                        site_identity("rx1"), "--speed", "1"),
+                           capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        keys = listener.until(f"{ROOT}/radar/plots/b1/c1")
+        time.sleep(0.5)
+        while (env := listener.inbox.get(0.0)) is not None:
+            keys.append(env.key)
+    finally:
+        listener.close()
+    assert set(keys) == {f"{ROOT}/radar/plots/b1/c1"}, keys
+
+
 def test_tma_input_acked_for_operator_tma_not_for_a_viewer(secure: Secure) -> None:
     """``pfusion tma-input`` against a real tma service (identity tma-a1) fed one btracks
     cycle by bearing-tracker-a1 and site-rx1: as operator-tma the input is acked (exit
