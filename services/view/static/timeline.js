@@ -14,6 +14,7 @@ const timeline = (() => {
   const BUDGET_B = 300e6;
   const TRAIL = 30, TRAIL_DT = 1.0;  // view_model.py TRAIL, TRAIL_DT
   const ROWS = 240;                  // view_model.py ROWS: waterfall scans shown
+  const ARC_KEPT = 5;                // points kept of an elementary-track arc
   const KEPT = /^(gtracks|etracks\/|truth_radar|waterfall\/|tma\/|truth_sonar\/)/;
   const TIMES = 4096;                // frame times kept for the readout
   const names = [];                  // status and base names <-> small codes
@@ -22,37 +23,47 @@ const timeline = (() => {
   const scans = new Map();           // array -> {rows: [[t, Float32Array]], series: Map, last}
   const cache = new Map();           // topic -> [part, unpacked] of the last seek
   const drawn = [];                  // recent frame times (ms)
+  const pending = [];                // [topic, part] not packed yet, oldest first
+  const IDLE_MS = 1000;
   let bytes = 0, paused = false, at = null, lastMs = NaN, pruned = 0;
   const clock = () => (performance.timeOrigin + performance.now()) / 1000;
   const code = (s) => { let i = names.indexOf(s); if (i < 0) i = names.push(s) - 1; return i; };
   const f32 = (a) => Float32Array.from(a, (v) => (v === null ? NaN : v));
-  const arr = (a, i, n) => Array.from(a.subarray(i, i + n));
   const size = (p) => Object.values(p).reduce((b, v) => b + (ArrayBuffer.isView(v) ? v.byteLength : 8), 64);
 
   // ---- packing: one part per topic version ----
+  function put(dst, i, src, n) {  // src[0..n) (null: NaN) into dst from i; NaN when src is null
+    for (let j = 0; j < n; j++) dst[i + j] = src && src[j] !== null ? src[j] : NaN;
+  }
+
   function packTracks(g) {
     const ks = g.tracks, n = ks.length, off = new Int32Array(n + 1), eb = [], ei = [];
     const p = { t: g.t, id: new Int32Array(n), st: new Uint8Array(n), amb: new Uint8Array(n),
-      x: new Float32Array(6 * n), sig: new Float32Array(6 * n), ell: new Float32Array(3 * n).fill(NaN),
+      x: new Float32Array(6 * n), sig: new Float32Array(6 * n), ell: new Float32Array(3 * n),
       score: new Float32Array(n), seen: new Int32Array(n), off };
-    ks.forEach((k, i) => {
+    for (let i = 0; i < n; i++) {
+      const k = ks[i];
       p.id[i] = k.id; p.st[i] = code(k.status); p.amb[i] = k.amb ? 1 : 0;
-      p.x.set(f32(k.x), 6 * i); p.sig.set(f32(k.sig), 6 * i);
-      if (k.ell) p.ell.set(f32(k.ell), 3 * i);
+      put(p.x, 6 * i, k.x, 6); put(p.sig, 6 * i, k.sig, 6); put(p.ell, 3 * i, k.ell, 3);
       p.score[i] = k.score; p.seen[i] = k.n;
-      k.et.forEach(([b, e]) => { eb.push(code(b)); ei.push(e); });
+      for (const [b, e] of k.et) { eb.push(code(b)); ei.push(e); }
       off[i + 1] = eb.length;
-    });
+    }
     Object.assign(p, { eb: Uint16Array.from(eb), ei: Int32Array.from(ei) });
     p.bytes = size(p);
     return p;
   }
 
+  // An arc keeps ARC_KEPT of its points, evenly spaced, first and last included (its
+  // shape at the plan's scales; the history's largest part otherwise).
   function packArcs(e) {
     const n = e.arcs.length, off = new Int32Array(n + 1);
-    e.arcs.forEach((a, i) => { off[i + 1] = off[i] + a.pts.length; });
+    e.arcs.forEach((a, i) => { off[i + 1] = off[i] + Math.min(a.pts.length, ARC_KEPT); });
     const pts = new Float32Array(2 * off[n]);
-    e.arcs.forEach((a, i) => a.pts.forEach((q, j) => pts.set(f32(q), 2 * (off[i] + j))));
+    e.arcs.forEach((a, i) => {
+      const m = off[i + 1] - off[i], step = m > 1 ? (a.pts.length - 1) / (m - 1) : 0;
+      for (let j = 0; j < m; j++) put(pts, 2 * (off[i] + j), a.pts[Math.round(j * step)], 2);
+    });
     const p = { t: e.t, id: Int32Array.from(e.arcs, (a) => a.id), st: Uint8Array.from(e.arcs, (a) => code(a.status)),
       amb: Uint8Array.from(e.arcs, (a) => (a.amb ? 1 : 0)), off, pts };
     p.bytes = size(p);
@@ -60,7 +71,8 @@ const timeline = (() => {
   }
 
   function packTruth(s) {
-    const p = { t: s.t, id: Int32Array.from(s.id), x: f32(s.x), y: f32(s.y) };
+    const p = { t: s.t, id: Int32Array.from(s.id), x: new Float32Array(s.x.length), y: new Float32Array(s.y.length) };
+    put(p.x, 0, s.x, s.x.length); put(p.y, 0, s.y, s.y.length);
     p.bytes = size(p);
     return p;
   }
@@ -117,14 +129,14 @@ const timeline = (() => {
   function unpackTracks(p, k) {
     const tr = trails(p, k);
     return { t: p.t, tracks: Array.from(p.id, (id, i) => ({
-      id, status: names[p.st[i]], amb: p.amb[i] === 1, x: arr(p.x, 6 * i, 6), sig: arr(p.sig, 6 * i, 6),
-      ell: arr(p.ell, 3 * i, 3), score: p.score[i], n: p.seen[i], trail: tr[i],
+      id, status: names[p.st[i]], amb: p.amb[i] === 1, x: p.x.subarray(6 * i, 6 * i + 6),
+      sig: p.sig.subarray(6 * i, 6 * i + 6), ell: p.ell.subarray(3 * i, 3 * i + 3), score: p.score[i], n: p.seen[i], trail: tr[i],
       et: Array.from(p.eb.subarray(p.off[i], p.off[i + 1]), (b, j) => [names[b], p.ei[p.off[i] + j]]) })) };
   }
 
   function unpackArcs(p) {
     return { t: p.t, arcs: Array.from(p.id, (id, i) => ({ id, status: names[p.st[i]], amb: p.amb[i] === 1,
-      pts: Array.from({ length: p.off[i + 1] - p.off[i] }, (_, j) => arr(p.pts, 2 * (p.off[i] + j), 2)) })) };
+      pts: Array.from({ length: p.off[i + 1] - p.off[i] }, (_, j) => p.pts.subarray(2 * (p.off[i] + j), 2 * (p.off[i] + j) + 2)) })) };
   }
 
   function unpackScans(p) {
@@ -152,7 +164,7 @@ const timeline = (() => {
   function evict(now) {
     while (frames.length > 1 && (frames[0].t < now - HISTORY_S || bytes > BUDGET_B)) {
       const [old] = frames.splice(0, 1), next = frames[0].parts;
-      Object.entries(old.parts).forEach(([n, p]) => { if (next[n] !== p) bytes -= p.bytes; });
+      Object.entries(old.parts).forEach(([n, p]) => { if (next[n] !== p) { bytes -= p.bytes; p.gone = true; } });
     }
     if (now - pruned < 1.0) return;
     pruned = now;
@@ -179,20 +191,33 @@ const timeline = (() => {
   }
 
   // A message's topics: the data ones are recorded (a new frame) and shown unless paused,
-  // the others (geometry, services, link) always shown.
+  // the others (geometry, services, link) always shown. Packing waits for the page to be
+  // idle (at most IDLE_MS), after the frame is drawn: a part is packed in place, so every
+  // frame that shares it sees the packed form.
   function take(msgTopics, now = clock()) {
     const changed = {};
     Object.entries(msgTopics).forEach(([n, s]) => {
       if (!KEPT.test(n)) { topics[n] = s; return; }
-      live[n] = s; changed[n] = pack(n, s); bytes += changed[n].bytes;
+      live[n] = s; changed[n] = { raw: s, bytes: 0 }; pending.push([n, changed[n]]);
       if (!paused) topics[n] = s;
     });
     if (Object.keys(changed).length) {
       const prev = frames.length ? frames[frames.length - 1].parts : {};
       frames.push({ t: Math.max(now, frames.length ? frames[frames.length - 1].t : now), parts: { ...prev, ...changed } });
       evict(now);
+      if (pending.length === Object.keys(changed).length) requestIdleCallback(packPending, { timeout: IDLE_MS });
     }
     bar();
+  }
+
+  function packPending() {
+    pending.splice(0).forEach(([n, part]) => {
+      const raw = part.raw;
+      delete part.raw;
+      if (part.gone && !n.startsWith("waterfall/")) return;  // evicted before it was packed
+      Object.assign(part, pack(n, raw));
+      if (!part.gone) bytes += part.bytes;
+    });
   }
 
   // ---- what the operator does ----
@@ -212,6 +237,7 @@ const timeline = (() => {
   function seek(t) {  // pause on the frame shown at page time t; returns the ms it took
     if (!frames.length) return NaN;
     const t0 = performance.now(), k = indexAt(t), f = frames[k];
+    packPending();
     paused = true; at = f.t;
     Object.keys(topics).filter((n) => KEPT.test(n) && !(n in f.parts)).forEach((n) => delete topics[n]);
     Object.entries(f.parts).forEach(([n, p]) => {
@@ -264,7 +290,7 @@ const timeline = (() => {
   $t("tl-live").addEventListener("click", goLive);
   $t("tl-scrub").addEventListener("input", (ev) => seek(+ev.target.value));
 
-  return { take, pause, seek, goLive, frameDone,
+  return { take, pause, seek, goLive, frameDone, settle: packPending,
     get paused() { return paused; }, get lastMs() { return lastMs; }, get bytes() { return bytes + scanBytes(); },
     times: () => frames.map((f) => f.t), live: () => live, drawTimes: () => drawn.splice(0, drawn.length) };
 })();
