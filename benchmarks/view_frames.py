@@ -119,8 +119,8 @@ class Scene:
         self.v = np.column_stack([speed * np.sin(heading), speed * np.cos(heading)])
         self.status = rng.choice(["confirmed", "tentative", "coasting"], n, p=[0.9, 0.05, 0.05])
         self.amb = rng.random(n) < 0.02
-        self.brg0, self.rate = rng.uniform(0, 2 * np.pi, m), rng.uniform(-2e-3, 2e-3, m)
-        self.rng0 = rng.uniform(3e3, 3e4, m)
+        self.brg0, self.rate = rng.uniform(0, 2 * np.pi, m), rng.uniform(-5e-3, 5e-3, m)
+        self.rng0, self.cv = rng.uniform(3e3, 3e4, m), rng.uniform(-5.0, 5.0, (m, 2))
 
     def messages(self, t: float) -> list[tuple[str, dict[str, Any]]]:
         """Every key's message of second t (key suffix under the root, message)."""
@@ -148,8 +148,7 @@ class Scene:
         brg = np.mod(self.brg0 + self.rate * dt, 2 * np.pi)
         own = {"x": 3.0 * dt, "y": 0.0, "heading": np.pi / 2, "speed": 3.0}
         x, y = own["x"] + self.rng0 * np.sin(brg), self.rng0 * np.cos(brg)
-        sol = {"t": t, "vx": 2.0, "vy": -1.0, "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel(),
-               "course": 2.03, "speed": 2.24, "constrained": False, "bounds": [100.0, 1e5, 0.0, 0.0, 0.0, 20.0],
+        sol = {"t": t, "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel(), "constrained": False, "bounds": [100.0, 1e5, 0.0, 0.0, 0.0, 20.0],
                "bounds_modified": False, "phase": "post", "residual_factor": 1.0, "legs": [0.0]}
         return [
             ("sonar/detections/a1", {**v, "seq": int(t), "array": "a1", "own": own, "brg": brg,
@@ -158,7 +157,9 @@ class Scene:
                 {"id": k, "status": "confirmed", "x": [brg[k], self.rate[k], 70.0, 0.0],
                  "P": [1e-4, 0, 0, 0] * 4, "quality": 1.0, "ambiguous": False} for k in range(m)]}),
             ("sonar/tma/a1", {**v, "array": "a1", "solutions": [
-                {**sol, "track": k, "x": x[k], "y": y[k], "range": self.rng0[k]} for k in range(m)]}),
+                {**sol, "track": k, "x": x[k], "y": y[k], "range": self.rng0[k], "vx": self.cv[k, 0],
+                 "vy": self.cv[k, 1], "course": float(np.mod(np.arctan2(*self.cv[k]), 2 * np.pi)),
+                 "speed": float(np.hypot(*self.cv[k]))} for k in range(m)]}),
             ("sim/truth/sonar", {**v, "array": "a1", "own": own, "id": np.arange(m), "x": x, "y": y,
                                  "vx": np.zeros(m), "vy": np.zeros(m), "brg": brg}),
         ]
