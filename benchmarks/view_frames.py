@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from common.bus.procs import Child, start_router
-from common.bus.transport import Publisher, free_port, open_session, wait_port
+from common.bus.transport import free_port, open_session, wait_port
 from common.deploy.config import ZenohConfig, load
 from common.wire import protocol
 from common.wire.view_model import ViewModel
@@ -89,7 +89,8 @@ return out;
 # Where a frame's time goes: median ms of 5 runs of each part on the live state.
 BREAKDOWN_JS = """
 const text = JSON.stringify({ topics: timeline.live() }), g = topics.gtracks, geo = topics.geometry, out = {};
-const parts = { parse: () => JSON.parse(text), record: () => { timeline.take(JSON.parse(text).topics); timeline.settle(); },
+const parts = { parse: () => JSON.parse(text),
+  record: () => { timeline.take(JSON.parse(text).topics); timeline.settle(); },
   plan: () => drawPlan(geo, g), table: () => trackTable(g.tracks), sonar: () => sonar(), render: () => render() };
 Object.entries(parts).forEach(([name, f]) => {
   const ms = [];
@@ -148,7 +149,8 @@ class Scene:
         brg = np.mod(self.brg0 + self.rate * dt, 2 * np.pi)
         own = {"x": 3.0 * dt, "y": 0.0, "heading": np.pi / 2, "speed": 3.0}
         x, y = own["x"] + self.rng0 * np.sin(brg), self.rng0 * np.cos(brg)
-        sol = {"t": t, "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel(), "constrained": False, "bounds": [100.0, 1e5, 0.0, 0.0, 0.0, 20.0],
+        sol = {"t": t, "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel(), "constrained": False,
+               "bounds": [100.0, 1e5, 0.0, 0.0, 0.0, 20.0],
                "bounds_modified": False, "phase": "post", "residual_factor": 1.0, "legs": [0.0]}
         return [
             ("sonar/detections/a1", {**v, "seq": int(t), "array": "a1", "own": own, "brg": brg,
@@ -282,7 +284,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             s1, w1 = view_stats(port), time.monotonic()
             stop.set()
             feed.join()
-            state = d.execute_script("const ts = timeline.times(); return {n: ts.length, span: ts[ts.length - 1] - ts[0],"
+            state = d.execute_script("const ts = timeline.times(); "
+                                     "return {n: ts.length, span: ts[ts.length - 1] - ts[0],"
                                      " bytes: timeline.bytes, tracks: timeline.live().gtracks.tracks.length}")
             run_mb, rss_mb = heap_mb(d), renderer_mb(d)
             scrubs = d.execute_script(SCRUB_JS, args.scrubs)
@@ -291,8 +294,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         stop.set()
         view.stop()
         router.stop()
-    return {"fill_s": fill_ms / 1e3, "filled_mb": filled_mb, "heap_mb": max(filled_mb, run_mb), "run_mb": run_mb, "rss_mb": rss_mb,
-            "gaps": gaps, "frames": frames, "scrubs": scrubs, "parts": parts, "load": os.getloadavg(), "state": state, "wall": w1 - w0,
+    return {"fill_s": fill_ms / 1e3, "filled_mb": filled_mb, "heap_mb": max(filled_mb, run_mb), "run_mb": run_mb,
+            "rss_mb": rss_mb, "gaps": gaps, "frames": frames, "scrubs": scrubs, "parts": parts,
+            "load": os.getloadavg(), "state": state, "wall": w1 - w0,
             "bytes_s": (s1.get("bytes", 0) - s0.get("bytes", 0)) / (w1 - w0),
             "msgs_s": (s1.get("messages", 0) - s0.get("messages", 0)) / (w1 - w0)}
 
@@ -324,7 +328,8 @@ def main() -> int:
           f"{st['bytes'] / 1e6:.0f} MB of parts; {st['tracks']} tracks live")
     print(f"WebSocket: {r['bytes_s'] / 1e6:.2f} MB/s, {r['msgs_s']:.1f} messages/s to the page")
     print("one frame's parts, median ms of 5 (the live state): " + ", ".join(
-        f"{k} {v:.1f}" for k, v in r["parts"].items() if k != "kB") + f"; the state is {r['parts']['kB']:.0f} kB of JSON")
+        f"{k} {v:.1f}" for k, v in r["parts"].items() if k != "kB")
+        + f"; the state is {r['parts']['kB']:.0f} kB of JSON")
     print("machine load average (1, 5, 15 min) at the end: " + " ".join(f"{v:.1f}" for v in r["load"]))
     fails = [k for k, ok in (("frame_p99", f[1] <= GOALS["frame_p99"]), ("frame_max", f[2] <= GOALS["frame_max"]),
                              ("gap_max", g[2] <= GOALS["gap_max"]), ("heap_mb", r["heap_mb"] <= GOALS["heap_mb"]),

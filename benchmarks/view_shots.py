@@ -90,7 +90,8 @@ def main() -> int:
             d.execute_script(FILL_JS, tpl, 600, 1.0)
             feed = threading.Thread(target=publish, args=(session, scene, args.seconds + 60, stop))
             feed.start()
-            while not d.execute_script("return !!topics.gtracks && topics.gtracks.t >= arguments[0]", T0 + args.seconds):
+            shown = "return !!topics.gtracks && topics.gtracks.t >= arguments[0]"
+            while not d.execute_script(shown, T0 + args.seconds):
                 time.sleep(0.5)
             shoot(d, args.out)
             stop.set()
