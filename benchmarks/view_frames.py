@@ -45,6 +45,7 @@ import numpy as np
 
 from common.bus.procs import Child, start_router
 from common.bus.transport import free_port, open_session, wait_port
+from common.core.angles import wrap_2pi
 from common.deploy.config import ZenohConfig, load
 from common.wire import protocol
 from common.wire.view_model import ViewModel
@@ -146,7 +147,7 @@ class Scene:
 
     def sonar(self, t: float, v: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
         m, dt = len(self.brg0), t - T0
-        brg = np.mod(self.brg0 + self.rate * dt, 2 * np.pi)
+        brg = np.asarray(wrap_2pi(self.brg0 + self.rate * dt))
         own = {"x": 3.0 * dt, "y": 0.0, "heading": np.pi / 2, "speed": 3.0}
         x, y = own["x"] + self.rng0 * np.sin(brg), self.rng0 * np.cos(brg)
         sol = {"t": t, "P": np.diag([1e5, 4e4, 1.0, 1.0]).ravel(), "constrained": False,
@@ -160,7 +161,7 @@ class Scene:
                  "P": [1e-4, 0, 0, 0] * 4, "quality": 1.0, "ambiguous": False} for k in range(m)]}),
             ("sonar/tma/a1", {**v, "array": "a1", "solutions": [
                 {**sol, "track": k, "x": x[k], "y": y[k], "range": self.rng0[k], "vx": self.cv[k, 0],
-                 "vy": self.cv[k, 1], "course": float(np.mod(np.arctan2(*self.cv[k]), 2 * np.pi)),
+                 "vy": self.cv[k, 1], "course": float(wrap_2pi(np.arctan2(*self.cv[k]))),
                  "speed": float(np.hypot(*self.cv[k]))} for k in range(m)]}),
             ("sim/truth/sonar", {**v, "array": "a1", "own": own, "id": np.arange(m), "x": x, "y": y,
                                  "vx": np.zeros(m), "vy": np.zeros(m), "brg": brg}),
