@@ -288,7 +288,11 @@ const timeline = (() => {
 
   $t("tl-pause").addEventListener("click", pause);
   $t("tl-live").addEventListener("click", goLive);
-  $t("tl-scrub").addEventListener("input", (ev) => seek(+ev.target.value));
+  let wanted = null;  // a drag's input events: one seek per animation frame, to the latest
+  $t("tl-scrub").addEventListener("input", (ev) => {
+    if (wanted === null) requestAnimationFrame(() => { const t = wanted; wanted = null; seek(t); });
+    wanted = +ev.target.value;
+  });
 
   return { take, pause, seek, goLive, frameDone, settle: packPending,
     get paused() { return paused; }, get lastMs() { return lastMs; }, get bytes() { return bytes + scanBytes(); },
