@@ -9,7 +9,7 @@ Writes, each quantised to 32 colours (small files):
 - ``view-zoom.png``: the radar plan zoomed in on one track: 2-sigma ellipses, trails,
   elementary-track arcs of the 3 bases, truth;
 - ``view-paused.png``: the header and the plan paused and scrubbed back 5 minutes;
-- ``view-sonar.png``: the sonar panel (waterfall, TMA plan and list).
+- ``view-1000-sonar.png``: the sonar panel (waterfall, TMA plan and list).
 
 Run: .venv/bin/python benchmarks/view_shots.py [--out docs/img] [--sonar 12]
 """
@@ -65,7 +65,7 @@ def shoot(d: Any, out: Path) -> None:
     rect = d.execute_script("const r = $('plan').getBoundingClientRect(); return [r.right, r.bottom];")
     save(d.get_screenshot_as_png(), out / "view-paused.png", (0, 0, int(rect[0]) + 8, int(rect[1]) + 30))
     d.execute_script("timeline.goLive(); $('sonar').scrollIntoView();")
-    save(d.find_element(By.ID, "sonar").screenshot_as_png, out / "view-sonar.png")
+    save(d.find_element(By.ID, "sonar").screenshot_as_png, out / "view-1000-sonar.png")
 
 
 def main() -> int:
