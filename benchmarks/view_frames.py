@@ -95,7 +95,8 @@ const median = (f) => { const ms = []; for (let i = 0; i < 5; i++) { const t = p
   ms.push(performance.now() - t); } return ms.sort((a, b) => a - b)[2]; };
 out.parse = median(() => JSON.parse(text));
 out.record = median(() => { timeline.take(JSON.parse(text).topics); timeline.settle(); }) - out.parse;
-const fns = ['drawPlan', 'trackTable', 'waterfall', 'tmaPlan', 'services', 'details', 'tick'], acc = {};
+const fns = ['drawPlan', 'trackTable', 'waterfall', 'tmaPlan', 'sonarTable', 'services', 'details', 'tick']
+  .filter((f) => typeof window[f] === 'function'), acc = {};
 const orig = Object.fromEntries(fns.map((f) => [f, window[f]]));
 fns.forEach((f) => { acc[f] = 0; window[f] = function (...a) {
   const t = performance.now();
