@@ -17,6 +17,7 @@ import re
 import signal
 import sys
 
+from common.bus import RESTART
 from common.deploy.config import Config, ConfigError, load
 
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -27,6 +28,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "params": ("services.params.main", "print the configuration reference or check a file"),
     "bearing-tracker": ("services.bearing_tracker.main", "sonar bearing tracker of one array (000)"),
     "tma": ("services.tma.main", "target motion analysis of one array's confirmed bearing tracks (002, 003)"),
+    "tma-input": ("services.tma_input.main",
+                  "an operator's TMA bounds or support values for one bearing track, acknowledged"),
     "channel-plotter": ("services.channel_plotter.main", "fuse one base's channel plots (001 modules 31-34)"),
     "elementary-tracker": ("services.elementary_tracker.main", "elementary tracks of one base (001 modules 41-44)"),
     "run": ("services.run.main", "start every service of a deployment, restart crashed ones"),
@@ -54,6 +57,8 @@ EXAMPLES: dict[str, str] = {
     "params": "pfusion params --check scenarios/two_targets.toml",
     "bearing-tracker": "pfusion bearing-tracker --config scenarios/sonar_tma.toml --array a1",
     "tma": "pfusion tma --config scenarios/sonar_tma.toml --array a1",
+    "tma-input": "pfusion tma-input bounds --config scenarios/sonar_tma.toml --array a1 --track 1 "
+                 "--course-min 200 --course-max 300 --speed-min 2 --speed-max 6",
     "channel-plotter": "pfusion channel-plotter --config scenarios/two_targets.toml --base b1",
     "elementary-tracker": "pfusion elementary-tracker --config scenarios/two_targets.toml --base b1",
     "run": "pfusion run --config scenarios/two_targets.toml --with-router",
@@ -152,7 +157,9 @@ def main(argv: list[str] | None = None) -> int:
     # a test's capture, without a file descriptor)
     faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
     try:
-        return int(module.main(args) or 0)
+        while (code := int(module.main(args) or 0)) == RESTART:  # a reset command (common.bus.service)
+            pass
+        return code
     except ConfigError as e:
         print(f"pfusion {pre.command}: {e}", file=sys.stderr)
         return 2

@@ -5,3 +5,5 @@ that imported them once). The only package that talks to Zenoh.
 
 May import: every package of ``common`` except ``cli``; never ``services``.
 """
+
+RESTART = 75  # a service's exit code after a reset command: common.cli runs its main again

@@ -7,6 +7,13 @@ drain its :class:`~common.bus.transport.Inbox` on the main thread. A handler rai
 logs the reason (first time per reason, then every 1000th), counts it and goes on.
 Samples that never arrived are counted per key from the publishers' stamps
 (``common.core.sequence``) and logged the same way.
+
+Every service answers queries on ``<root>/control/<service>/<instance>`` with its
+counters and ``fresh`` (nothing processed yet): ``pfusion replay`` learns there which
+services are ahead of a recording. A query with the parameter ``reset`` restarts the
+service with a fresh state: :meth:`Service.run` replies, stops without flushing
+(``at_end`` is not called) and returns :data:`common.bus.RESTART`, on which ``common.cli`` runs
+the command's ``main`` again in the same process (new cores, new session, new token).
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ from typing import Any
 import numpy as np
 import zenoh
 
+from common.bus import RESTART
 from common.bus.transport import (
     CLOSE_LINGER_S,
     LOG_EVERY,
@@ -65,6 +73,7 @@ class Service:
         self._publishers: dict[str, Publisher] = {}
         self._entities: list[Any] = []
         self._stop = threading.Event()
+        self._reset = False
         self._last_put = float("-inf")
         self._started = time.monotonic()
         self.session = open_session(cfg.zenoh)
@@ -131,6 +140,7 @@ class Service:
         token = self.session.liveliness().declare_token(
             f"{self.root}/alive/{self.name}/{self.instance}"
         )
+        self.serve(f"control/{self.name}/{self.instance}", self._control)
         self.log.info("running")
         next_metrics = time.monotonic()
         try:
@@ -143,15 +153,30 @@ class Service:
                 if time.monotonic() >= next_metrics:
                     self.publish(f"metrics/{self.name}/{self.instance}", self.metrics())
                     next_metrics = time.monotonic() + METRICS_PERIOD_S
-            if at_end is not None:
+            if at_end is not None and not self._reset:
                 self._guard("(end of input)", at_end)
-            self._guard("(end)", self._finish)
+            if not self._reset:
+                self._guard("(end)", self._finish)
         finally:
             signals.close()
             token.undeclare()
             self.close()
+        if self._reset:
+            self.log.warning("reset by a control query: restarting with a fresh state")
+            return RESTART
         self.log.info("stopped: %s", dict(self.counters))
         return 0
+
+    def _control(self, query: zenoh.Query) -> None:
+        """Answer a control query with the counters and ``fresh``; with the parameter
+        ``reset``, stop the loop for a restart (run returns RESTART)."""
+        reset = "reset" in query.parameters
+        reply = self.metrics() | {"fresh": self.last_t is None and self.counters["in"] == 0,
+                                  "state": "resetting" if reset else "running"}
+        query.reply(self.key(f"control/{self.name}/{self.instance}"), protocol.encode(reply))
+        if reset:
+            self._reset = True
+            self._stop.set()
 
     def _dispatch(self, env: Any) -> None:
         ke = zenoh.KeyExpr(env.key)

@@ -6,9 +6,11 @@ each identity of a deployment may do, and :func:`access_control` turns that into
 ``access_control`` section of a Zenoh 1.x router (deny by default): a receiver site
 publishes only its bases' plots and its arrays' detections, a service only its output,
 metrics and liveliness keys, the read roles ``viewer`` (tracks and status) and
-``analyst`` (everything) only read, ``operator-tma`` only sets TMA bounds and support,
-and only ``global-fusion`` publishes ``radar/gtracks``. Flows are seen from the router: *ingress* is what a client
-sends to it, *egress* what it sends to a client.
+``analyst`` (everything) only read, ``operator-tma`` (``pfusion tma-input``) only
+enters TMA bounds, support values and their clearing and reads the TMA solutions and the
+tma service's acks, and only ``global-fusion`` publishes ``radar/gtracks``. Flows are
+seen from the router: *ingress* is what a client sends to it, *egress* what it sends to
+a client.
 
 Under mutual TLS each identity is also bound to certificates: a subject with both
 ``usernames`` and ``cert_common_names`` matches only when both do (verified on 1.10.2),
@@ -44,6 +46,8 @@ ROUTER_FUSION = "router-fusion"
 VIEWER_TOOLS = ("status", "run", "export")  # tracks, liveliness and metrics are enough
 ANALYST_TOOLS = ("watch", "record", "demo", "view")  # any key: plots, etracks, truth
 TEST_FEEDS = ("simulate", "replay")
+OPERATOR_TMA_TOOLS = ("tma-input",)
+OPERATOR_TMA_PUTS = ("sonar/tma/bounds/*", "sonar/tma/support/*", "sonar/tma/clear/*")
 ANALYST_TOKENS = ("alive/record/*", "alive/demo/*")
 VIEWER_READS = ("radar/gtracks", "sonar/btracks/*", "sonar/tma/*", "metrics/**")
 ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
@@ -82,6 +86,8 @@ def identity_of(command: str, base: str | None = None, array: str | None = None)
         return VIEWER
     if command in ANALYST_TOOLS:
         return ANALYST
+    if command in OPERATOR_TMA_TOOLS:
+        return OPERATOR_TMA
     return None
 
 
@@ -94,10 +100,11 @@ def router_identity(site_id: str) -> str:
 
 
 def _service(command: str, instance: str, out: list[str], inputs: list[str]) -> Grant:
-    """A service: its outputs, its metrics key and its liveliness token."""
+    """A service: its outputs, its metrics key, its liveliness token and its control
+    queryable (common.bus.control)."""
     name = token_name(command)
     return Grant(publish=[*out, f"metrics/{name}/{instance}"], subscribe=inputs,
-                 tokens=[f"alive/{name}/{instance}"])
+                 tokens=[f"alive/{name}/{instance}"], serve=[f"control/{name}/{instance}"])
 
 
 def grants(cfg: Config) -> dict[str, Grant]:
@@ -119,17 +126,19 @@ def grants(cfg: Config) -> dict[str, Grant]:
     for a in cfg.arrays:
         bt = g[f"bearing-tracker-{a.id}"] = _service(
             "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"], [f"sonar/detections/{a.id}"])
-        bt.serve = [f"sonar/history/{a.id}/*"]
+        bt.serve.append(f"sonar/history/{a.id}/*")
         tma = g[f"tma-{a.id}"] = _service(
-            "tma", a.id, [f"sonar/tma/{a.id}"],
+            "tma", a.id, [f"sonar/tma/{a.id}", f"sonar/tma/ack/{a.id}"],
             [f"sonar/detections/{a.id}", f"sonar/btracks/{a.id}", f"sonar/tma/bounds/{a.id}",
-             f"sonar/tma/support/{a.id}"])
+             f"sonar/tma/support/{a.id}", f"sonar/tma/clear/{a.id}"])
         tma.query = [f"sonar/history/{a.id}/*"]
     g[VIEWER] = Grant(subscribe=list(VIEWER_READS), watch_alive=True)
     g[ANALYST] = Grant(subscribe=["**"], query=["**"], tokens=list(ANALYST_TOKENS),
                        watch_alive=True)
-    g[OPERATOR_TMA] = Grant(publish=["sonar/tma/bounds/*", "sonar/tma/support/*"])
+    g[OPERATOR_TMA] = Grant(publish=list(OPERATOR_TMA_PUTS),
+                            subscribe=["sonar/tma/*", "sonar/tma/ack/*"])
     g[SIMULATOR] = Grant(publish=["radar/plots/**", "sonar/detections/**", "sim/**"],
+                         query=["control/**"],  # replay: which services are ahead, --reset
                          tokens=["alive/simulate/*"], watch_alive=True)
     return g
 

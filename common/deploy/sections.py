@@ -15,6 +15,7 @@ from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfi
 from common.deploy.structure import ARRAY, BASE, ORIGIN, ZENOH, Table
 from common.radar.elementary.tracker import ElementaryParams, RadarCrossingParams
 from common.radar.fusion.params import FusionParams
+from common.radar.network.params import NetworkParams
 from common.radar.plots.channel_fusion import PlotterParams
 from common.radar.plots.units import IngestParams
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
@@ -27,6 +28,7 @@ SECTIONS: dict[str, type] = {
     "radar.crossing": RadarCrossingParams,
     "radar.fusion": FusionParams,
     "radar.fusion_crossing": CrossingParams,
+    "radar.network": NetworkParams,
     "radar.ingest": IngestParams,
     "radar.ingest.*": IngestParams,
     "sonar.tracker": SonarTrackerParams,

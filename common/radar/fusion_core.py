@@ -66,8 +66,9 @@ class Network:
     GlobalTracks: score 0 and ambiguous false (it keeps no elementary scores and runs
     no crossing management, docs/protocol.md)."""
 
-    def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams) -> None:
-        self.core = NetworkFusion(bases, params)
+    def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams,
+                 tracker: ElementaryParams) -> None:
+        self.core = NetworkFusion(bases, params, tracker.sigma_gamma, tracker.sigma_omega)
         self.bases = tuple(b.id for b in bases)
 
     def _tracks(self, r: NetworkReport) -> GlobalTracks:
@@ -83,9 +84,11 @@ class Network:
 
 
 def fusion_core(bases: Sequence[BaseGeometry], fusion: FusionParams,
-                crossing: CrossingParams | None, tracker: ElementaryParams) -> FusionCore:
+                crossing: CrossingParams | None, tracker: ElementaryParams,
+                network: NetworkParams | None = None) -> FusionCore:
     """The core of a deployment (module doc). `fusion`, `crossing`: [radar.fusion],
-    [radar.fusion_crossing] of 001's core; `tracker` ([radar.tracker]): the elementary
+    [radar.fusion_crossing] of 001's core; `network`: [radar.network] of the network
+    core (its defaults when None); `tracker` ([radar.tracker]): the elementary
     trackers' Q [20], for the decorrelation of either core. Raises ValueError for bases
     neither core can fuse."""
     rx = np.array([b.rx for b in bases], dtype=float).reshape(-1, 3)
@@ -99,5 +102,4 @@ def fusion_core(bases: Sequence[BaseGeometry], fusion: FusionParams,
                          f"{len(bases)} bases over {receivers} receiver(s)"
                          + (f", {', '.join(no_az)} declared azimuth = false (range-Doppler)"
                             if no_az else ""))
-    return Network(bases, NetworkParams(sigma_gamma=tracker.sigma_gamma,
-                                        sigma_omega=tracker.sigma_omega))
+    return Network(bases, network or NetworkParams(), tracker)

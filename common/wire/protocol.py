@@ -155,18 +155,32 @@ TMA_SOLUTION = {
     "converged": Field("bool", optional=True), "ctma_exhausted": Field("bool", optional=True),
     "range_observable": Field("bool", optional=True),
 }
-TMA = {"v": V, "t": T, "array": ID, "solutions": Field("maps", sub=TMA_SOLUTION)}
+TMA_BIRTH = {"track": Field("int", nonneg=True), "birth": T}
+TMA = {"v": V, "t": T, "array": ID, "solutions": Field("maps", sub=TMA_SOLUTION),
+       # added in v1 (issue 31): the birth of every track of the cycle
+       "births": Field("maps", optional=True, sub=TMA_BIRTH)}
+# operator inputs (issue 31): req (request id) asks for an ack, birth names the track
+REQ = Field("str", optional=True)
+BIRTH = Field("float", optional=True, nonneg=True)
 TMA_BOUNDS = {
-    "v": V, "t": T, "track": Field("int", optional=True, nonneg=True),
+    "v": V, "t": T, "track": Field("int", optional=True, nonneg=True), "birth": BIRTH, "req": REQ,
     "r_min": Field("float", nonneg=True), "r_max": Field("float", positive=True),
     "course_min": Field("float", angle=True), "course_max": Field("float", angle=True),
     "speed_min": Field("float", nonneg=True), "speed_max": Field("float", positive=True),
 }
 TMA_SUPPORT = {
-    "v": V, "t": T, "track": Field("int", nonneg=True),
+    "v": V, "t": T, "track": Field("int", nonneg=True), "birth": BIRTH, "req": REQ,
     "kind": Field("str", choices=("range", "course", "speed")), "value": Field("float"),
     "sigma": Field("float", positive=True),
     "obs_x": Field("float", optional=True), "obs_y": Field("float", optional=True),
+}
+TMA_CLEAR = {
+    "v": V, "t": T, "track": Field("int", nonneg=True), "birth": BIRTH, "req": REQ,
+    "what": Field("str", choices=("bounds", "support", "all")),
+}
+TMA_ACK = {
+    "v": V, "t": T, "req": ID, "ok": Field("bool"), "reason": ID,
+    "track": Field("int", optional=True, nonneg=True), "birth": BIRTH,
 }
 SIM_STATUS = {"v": V, "t": T, "state": Field("str", choices=("running", "done")),
               "scans": Field("int", nonneg=True), "published": Field("int", nonneg=True)}
@@ -176,6 +190,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
     "sim_status": SIM_STATUS, "btracks": BTRACKS, "history": HISTORY,
     "tma": TMA, "tma_bounds": TMA_BOUNDS, "tma_support": TMA_SUPPORT,
+    "tma_clear": TMA_CLEAR, "tma_ack": TMA_ACK,
 }
 
 # Key layout under the root -> message kind ("*" = one chunk: a base, channel, array, id).
@@ -190,6 +205,8 @@ KEY_KINDS: tuple[tuple[tuple[str, ...], str], ...] = (
     (("sonar", "tma", "*"), "tma"),
     (("sonar", "tma", "bounds", "*"), "tma_bounds"),
     (("sonar", "tma", "support", "*"), "tma_support"),
+    (("sonar", "tma", "clear", "*"), "tma_clear"),
+    (("sonar", "tma", "ack", "*"), "tma_ack"),
     (("sim", "truth", "radar"), "truth_radar"),
     (("sim", "truth", "sonar"), "truth_sonar"),
     (("sim", "status"), "sim_status"),

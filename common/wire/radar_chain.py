@@ -24,19 +24,22 @@ from common.radar.elementary.model import model_of
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
 from common.radar.fusion.params import FusionParams
 from common.radar.fusion_core import FusionCore, fusion_core
+from common.radar.network.params import NetworkParams
 from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
 from common.wire.radar_messages import gtracks_message, plots_of
 
 
 def global_fusion(cfg: Config) -> FusionCore:
     """The global fusion core of a deployment (common.radar.fusion_core.fusion_core):
-    [radar.fusion], [radar.fusion_crossing] (the sup-norm test of 004 when absent) and
-    [radar.tracker] (for the decorrelation). Raises ValueError if the bases cannot be
+    [radar.fusion], [radar.fusion_crossing] (the sup-norm test of 004 when absent),
+    [radar.network] (a network's fusion centre) and [radar.tracker] (for the
+    decorrelation). Raises ValueError if the bases cannot be
     fused."""
     crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     return fusion_core(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
-                       section(cfg, "radar.tracker", ElementaryParams))
+                       section(cfg, "radar.tracker", ElementaryParams),
+                       section(cfg, "radar.network", NetworkParams))
 
 
 class RadarChain:

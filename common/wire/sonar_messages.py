@@ -27,6 +27,8 @@ from common.sonar.tma.manager import (
 )
 from common.wire import protocol
 
+ACCEPTED = "accepted"  # the reason of an ack that accepts an operator input
+
 
 def btracks_message(array: str, c: Cycle, narrowband: bool) -> dict[str, Any]:
     """The btracks message of one seed 000 cycle (docs/protocol.md)."""
@@ -73,7 +75,8 @@ def history_from(msg: dict[str, Any]) -> TrackHistory:
 def tma_message(r: TmaReport) -> dict[str, Any]:
     """The tma message of one TMA cycle (docs/protocol.md)."""
     return {"v": protocol.VERSION, "t": r.t, "array": r.array,
-            "solutions": [_solution(tid, c) for tid, c in r.solutions]}
+            "solutions": [_solution(tid, c) for tid, c in r.solutions],
+            "births": [{"track": tid, "birth": b} for tid, b in r.births]}
 
 
 def _solution(track: int, c: CycleOutput) -> dict[str, Any]:
@@ -110,3 +113,41 @@ def support_from(msg: dict[str, Any]) -> tuple[int, Support]:
         raise Rejected("bad_support", "a range support needs obs_x and obs_y")
     xy = (0.0, 0.0) if ox is None or oy is None else (float(ox), float(oy))
     return msg["track"], Support(msg["kind"], float(msg["value"]), float(msg["sigma"]), float(msg["t"]), xy)
+
+
+def bounds_message(t: float, b: BoundsParams, track: int | None = None, birth: float | None = None,
+                   req: str | None = None) -> dict[str, Any]:
+    """A tma_bounds message: the array's bounds, or one track's (of that birth); ``req``
+    asks the tma service for an ack."""
+    msg: dict[str, Any] = {"v": protocol.VERSION, "t": t, **{k: getattr(b, k) for k in BOUNDS_FIELDS}}
+    return msg | _named(track, birth, req)
+
+
+def support_message(track: int, s: Support, birth: float | None = None, req: str | None = None
+                    ) -> dict[str, Any]:
+    """A tma_support message of one seed 002 support value (a range with its position)."""
+    msg: dict[str, Any] = {"v": protocol.VERSION, "t": s.t, "kind": s.kind, "value": s.value,
+                           "sigma": s.sigma}
+    if s.kind == "range":
+        msg |= {"obs_x": s.obs_xy[0], "obs_y": s.obs_xy[1]}
+    return msg | _named(track, birth, req)
+
+
+def clear_message(t: float, track: int, what: str, birth: float | None = None,
+                  req: str | None = None) -> dict[str, Any]:
+    """A tma_clear message: forget a track's operator bounds, support values or both."""
+    return {"v": protocol.VERSION, "t": t, "what": what} | _named(track, birth, req)
+
+
+def _named(track: int | None, birth: float | None, req: str | None) -> dict[str, Any]:
+    """The optional track, birth and request id of an operator input."""
+    return {k: v for k, v in (("track", track), ("birth", birth), ("req", req)) if v is not None}
+
+
+def ack_message(t: float, req: str, reason: str, track: int | None = None,
+                birth: float | None = None) -> dict[str, Any]:
+    """The tma service's answer to an operator input with a ``req``: ok when ``reason``
+    is "accepted", else the rejection reason (docs/protocol.md)."""
+    return {"v": protocol.VERSION, "t": t, "req": req, "ok": reason == ACCEPTED, "reason": reason,
+            **_named(track, birth, None)}
+

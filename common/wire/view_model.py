@@ -13,7 +13,9 @@ message time), waterfall rows (``ROWS`` per array), bearing-track series (the ro
 time window), sonar arrays (``MAX_ARRAYS``; elementary tracks only of the file's bases).
 Tracks that leave the global picture drop their trail.
 
-Shapes drawn by the page, in the deployment's East-North frame (metres):
+Shapes drawn by the page, in the deployment's East-North frame (metres; the geometry
+topic carries the frame's WGS-84 origin [lat, lon, h] when the deployment sets
+[radar.origin], from which the page draws its latitude/longitude graticule):
 - 2-sigma ellipse of a 2x2 position covariance C: semi-axes 2 sqrt(lambda_1,2) of the
   eigenvalues of C and the major axis' angle counter-clockwise from East (closed form
   of the 2x2 symmetric eigenproblem).
@@ -136,6 +138,7 @@ class ViewModel:
             "bases": [{"id": b.id, "tx": _round(b.tx[:2]), "rx": _round(b.rx[:2])}
                       for b in cfg.bases],
             "arrays": [a.id for a in cfg.arrays],
+            "origin": None if cfg.origin is None else [cfg.origin.lat0, cfg.origin.lon0, cfg.origin.h0],
         })
 
     def _topic(self, name: str) -> _Topic:

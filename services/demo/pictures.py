@@ -109,10 +109,9 @@ def sonar_picture(detections: list[Msg], btracks: list[Msg], truth: list[Msg],
         brg[np.abs(np.diff(brg, prepend=brg[0])) > 180] = np.nan
         wf.plot(brg, a[:, 0] / 60.0, "-", lw=1.5)
         wf.annotate(f"T{tid}", (np.degrees(a[-1, 1]), a[-1, 0] / 60.0))
-    wf.set_xlim(0, 360)
-    wf.invert_yaxis()
+    wf.set_xlim(0, 360)  # time upwards: newest at the top, as on the live view's waterfall
     wf.set_xlabel("true bearing (deg)")
-    wf.set_ylabel("time (min)")
+    wf.set_ylabel("time (min), newest at top")
     wf.set_title("Bearing-time waterfall")
     own = np.array([[m["own"]["x"], m["own"]["y"]] for m in truth]) if truth else np.zeros((0, 2))
     if len(own):

@@ -81,6 +81,10 @@ BAD = [
     ("sonar.tracker", SECTIONS["sonar.tracker"], {"alpha": 0.6, "beta": 0.5}, ("alpha", "beta"), "alpha + beta < 1"),
     ("sonar.tracker", SECTIONS["sonar.tracker"], {"band_hz": [900.0, 100.0]}, ("band_hz",), "low < high"),
     ("sonar.tma.bounds", BoundsParams, {"r_min": 5e5}, ("r_min", "r_max"), "r_min (500000) >= r_max (100000)"),
+    ("radar.network", SECTIONS["radar.network"], {"cell_fine": 2e4}, ("cell_fine", "cell_coarse"),
+     "cell_fine (20000) > cell_coarse (10000)"),
+    ("radar.network", SECTIONS["radar.network"], {"coast_tentative": 9.0}, ("coast_tentative", "coast"),
+     "coast_tentative (9) > coast (5)"),
 ]
 
 

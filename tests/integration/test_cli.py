@@ -37,6 +37,7 @@ ARGS = {
     "watch": f"--config {TWO} 'radar/gtracks'",
     "bearing-tracker": f"--config {SONAR} --array a1",
     "tma": f"--config {SONAR} --array a1",
+    "tma-input": f"clear --config {SONAR} --array a1 --track 1",
     "channel-plotter": f"--config {TWO} --base b1",
     "elementary-tracker": f"--config {TWO} --base b1",
     "run": f"--config {TWO}",

@@ -40,7 +40,7 @@ from common.bus.procs import Child, pfusion_argv
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS, load_config
 from common.cli import main as cli_main
-from common.deploy.acl import access_control, grants, router_identity, site_identity
+from common.deploy.acl import access_control, grants, identity_of, router_identity, site_identity
 from common.deploy.config import Config, ConfigError, ZenohConfig, load
 from common.deploy.deployment import plan
 from common.sim.scenario import load_scenario
@@ -187,16 +187,24 @@ def test_generated_access_control(tmp_path: Path) -> None:
     assert put["channel-plotter-b1"] == {"radar/fused/b1", "metrics/channel_plotter/b1"}
     assert put["elementary-tracker-b2"] == {"radar/etracks/b2", "metrics/elementary_tracker/b2"}
     assert put["bearing-tracker-a1"] == {"sonar/btracks/a1", "metrics/bearing_tracker/a1"}
-    assert put["tma-a2"] == {"sonar/tma/a2", "metrics/tma/a2"}
+    assert put["tma-a2"] == {"sonar/tma/a2", "sonar/tma/ack/a2", "metrics/tma/a2"}
     assert put["analyst"] == put["viewer"] == set()
-    assert put["operator-tma"] == {"sonar/tma/bounds/a1", "sonar/tma/bounds/a2"}
+    assert put["tma-a1"] == {"sonar/tma/a1", "sonar/tma/ack/a1", "metrics/tma/a1"}
+    assert put["operator-tma"] == {"sonar/tma/bounds/a1", "sonar/tma/bounds/a2",
+                                   "sonar/tma/support/a1", "sonar/tma/clear/a1"}
+    assert [u for u in users if "sonar/tma/clear/a1" in put[u]] == ["operator-tma", "router-north", "router-south"]
     assert put["router-north"] == put["site-north"] | put["channel-plotter-b1"] \
         | put["elementary-tracker-b1"] | put["bearing-tracker-a1"] | put["tma-a1"] \
         | put["operator-tma"]
     get = {u: {k for k in KEYS if allowed(acl, u, "egress", "put", f"{ROOT}/{k}")} for u in users}
     assert get["viewer"] == {"radar/gtracks", "sonar/btracks/a1", "sonar/btracks/a2",
                              "sonar/tma/a1", "sonar/tma/a2", *(k for k in KEYS if "metrics" in k)}
-    assert get["analyst"] == set(KEYS) and get["operator-tma"] == set()
+    assert get["analyst"] == set(KEYS)
+    # pfusion tma-input (identity operator-tma) reads the births of the tma messages and the acks
+    assert identity_of("tma-input", array="a1") == "operator-tma"
+    assert get["operator-tma"] == {"sonar/tma/a1", "sonar/tma/a2", "sonar/tma/ack/a1", "sonar/tma/ack/a2"}
+    assert allowed(acl, "tma-a1", "egress", "put", f"{ROOT}/sonar/tma/clear/a1")
+    assert not allowed(acl, "tma-a1", "egress", "put", f"{ROOT}/sonar/tma/clear/a2")
     for u, svc, inst in (("tma-a1", "tma", "a1"), ("global-fusion", "global_fusion", "main")):
         assert allowed(acl, u, "ingress", "liveliness_token", f"{ROOT}/alive/{svc}/{inst}")
         assert not allowed(acl, u, "ingress", "liveliness_token", f"{ROOT}/alive/tma/a2")
@@ -259,7 +267,8 @@ KEYS = ["radar/plots/b1/c1", "radar/plots/b1/c2", "radar/plots/b2/c1", "radar/pl
         "radar/fused/b1", "radar/fused/b2", "radar/etracks/b1", "radar/etracks/b2",
         "radar/gtracks", "sonar/detections/a1", "sonar/detections/a2", "sonar/btracks/a1",
         "sonar/btracks/a2", "sonar/tma/a1", "sonar/tma/a2", "sonar/tma/bounds/a1",
-        "sonar/tma/bounds/a2", "sim/truth/radar", "metrics/channel_plotter/b1",
+        "sonar/tma/bounds/a2", "sonar/tma/support/a1", "sonar/tma/clear/a1", "sonar/tma/ack/a1",
+        "sonar/tma/ack/a2", "sim/truth/radar", "metrics/channel_plotter/b1",
         "metrics/elementary_tracker/b2", "metrics/bearing_tracker/a1", "metrics/tma/a2",
         "metrics/tma/a1", "metrics/global_fusion/main", "metrics/channel_plotter/b2"]
 
@@ -728,6 +737,45 @@ def test_operator_tma_sets_bounds_a_viewer_cannot(secure: Secure) -> None:
     finally:
         listener.close()
     assert keys == [f"{ROOT}/sonar/tma/support/a1", f"{ROOT}/sonar/tma/bounds/a1"]
+
+
+def test_tma_input_acked_for_operator_tma_not_for_a_viewer(secure: Secure) -> None:
+    """``pfusion tma-input`` against a real tma service (identity tma-a1) fed one btracks
+    cycle by bearing-tracker-a1 and site-rx1: as operator-tma the input is acked (exit
+    0); as viewer its put never reaches the tma service (not in its log; no ack: exit 1)."""
+    log = secure.dir / "tma-a1.log"
+    tma = Child("tma-a1", "tma", "--config", str(secure.config), "--array", "a1",
+                "--connect", secure.endpoint, log=log)
+    viewer, seen = receiver(zc(secure, "viewer"), ["sonar/tma/a1"])
+    try:
+        with open_session(zc(secure, "site-rx1")) as site, \
+                open_session(zc(secure, "bearing-tracker-a1")) as bt:
+            deadline = time.monotonic() + WAIT_S
+            t = 0.0
+            while seen.get(0.2) is None:  # until the tma service publishes (once it runs)
+                assert time.monotonic() < deadline and tma.alive(), log.read_text()
+                t += 20.0
+                site.put(f"{ROOT}/sonar/detections/a1", protocol.encode(
+                    {"v": 1, "t": t, "seq": int(t), "array": "a1", "brg": [], "amp": [],
+                     "own": {"x": 0.0, "y": 0.0, "heading": 0.0, "speed": 3.0}}), congestion_control=BLOCK)
+                bt.put(f"{ROOT}/sonar/btracks/a1", protocol.encode(
+                    {"v": 1, "t": t, "array": "a1", "tracks": [
+                        {"id": 4, "status": "tentative", "x": [1.0, 0.0], "P": [1e-4, 0.0, 0.0, 1e-4],
+                         "quality": 1.0, "ambiguous": False}]}), congestion_control=BLOCK)
+        runs = {}
+        for who, timeout in (("operator-tma", "30"), ("viewer", "3")):
+            out = secure.dir / f"tma-input-{who}.log"
+            c = Child(f"tma-input-{who}", "tma-input", "clear", "--config", str(secure.config),
+                      "--array", "a1", "--track", "4", "--birth", "20.0", "--timeout", timeout,
+                      "--identity", who, "--connect", secure.endpoint, log=out)
+            runs[who] = (c.wait(60), out.read_text())
+    finally:
+        viewer.close()
+        tma.stop()
+    assert runs["operator-tma"][0] == 0, runs["operator-tma"][1]
+    assert "accepted by tma/a1: clear of track 4 born at t=20.0" in runs["operator-tma"][1]
+    assert runs["viewer"][0] == 1 and "no answer from tma/a1" in runs["viewer"][1], runs["viewer"][1]
+    assert log.read_text().count("tma_clear") == 1, log.read_text()
 
 
 SITE_HOST = """

@@ -36,7 +36,7 @@ from tests.harness import REPO, ROOT, SCENARIOS, Deployment
 
 TWO_TARGETS = SCENARIOS / "two_targets.toml"
 OUT = REPO / "out"
-CONFIRMED_RGB = (0x66, 0xBB, 0x6A)  # view.js COLOURS.confirmed
+CONFIRMED_RGB = (0x56, 0xB4, 0xE9)  # palette.js PALETTE.confirmed
 DEAD_RGB = "rgb(198, 40, 40)"       # view.css tr.dead
 
 
@@ -378,6 +378,8 @@ def test_view_stays_responsive_and_bounded_whatever_the_data(browser: Any, tmp_p
         wait("the page's socket", lambda: browser.execute_script("return wsOpen"), 30)
         for suffix, msg in sonar_messages()[:3]:  # own ship and the waterfall
             d.session.put(f"{ROOT}/{suffix}", protocol.encode(msg))
+        wait("own ship in the view before the TMA", lambda: browser.execute_script(
+            "return (topics['waterfall/a1'] || {rows: []}).rows.length === 3"), 30)
         d.session.put(f"{ROOT}/sonar/tma/a1", protocol.encode(unobservable_tma(3e5, 1e11)))
         d.session.put(f"{ROOT}/radar/gtracks", gtracks_msg(10.0, [
             (1, [20e3, 200.0, 30e3, 0.0, 9e3, 0.0], 2500.0),

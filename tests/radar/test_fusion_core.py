@@ -48,7 +48,7 @@ def test_several_receivers_or_range_doppler_take_the_network_core(
     tracker = ElementaryParams(sigma_gamma=3.0, sigma_omega=2e-3)
     c = core(bases(azimuth, receivers), tracker)
     assert isinstance(c, Network) and len(c.bases) == 6
-    assert (c.core.p.sigma_gamma, c.core.p.sigma_omega) == (3.0, 2e-3)  # [radar.tracker]'s Q [20]
+    assert (c.core.dec.sigma_gamma, c.core.dec.sigma_omega) == (3.0, 2e-3)  # [radar.tracker]'s Q [20]
 
 
 def test_mixed_bases_take_the_network_core() -> None:

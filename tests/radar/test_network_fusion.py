@@ -126,3 +126,20 @@ def test_ghost_formation(seed: int) -> None:
         out += fusion.push(bases[b].id, t, rep)
     s = ns.score(scene, out + fusion.flush())
     assert s.false < 0.01 * 20 * s.scans
+
+
+def test_radar_network_table_reaches_the_core() -> None:
+    """[radar.network] of a deployment file sets the network core's parameters (a list
+    becomes the tuple seed_z); the decorrelation takes [radar.tracker]'s Q [20]."""
+    from common.deploy.config import parse
+    from common.wire.radar_chain import global_fusion
+
+    bases = ns.network(np.random.default_rng(3))
+    doc = {"radar": {"base": [{"id": b.id, "tx": list(b.tx), "rx": list(b.rx), "channels": ["c"],
+                               "azimuth": False} for b in bases],
+                     "network": {"init_bases": 4, "seed_z": [2000.0], "window": 0.5},
+                     "tracker": {"sigma_gamma": 7.0}}}
+    core = global_fusion(parse(doc))
+    fusion = core.core  # type: ignore[attr-defined]
+    assert (fusion.p.init_bases, fusion.p.seed_z, fusion.p.window) == (4, (2000.0,), 0.5)
+    assert fusion.sigma_gamma == 7.0

@@ -66,15 +66,18 @@ class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
     `waiting` the seed cells deferred by max_cells."""
 
-    def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None
-                 ) -> None:
+    def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None,
+                 sigma_gamma: float = 5.0, sigma_omega: float = 1e-3) -> None:
+        """`sigma_gamma` (m/s^3), `sigma_omega` (rad/s^2): Q [20] of the elementary
+        trackers, with which the decorrelation predicts their previous report."""
         self.p = params or NetworkParams()
+        self.sigma_gamma = sigma_gamma
         self.ids = [b.id for b in bases]
         rx = np.array([b.rx for b in bases], dtype=float)
         _, rec = np.unique(np.round(rx, 3), axis=0, return_inverse=True)
         self.sites = Sites(np.array([b.tx for b in bases], dtype=float), rx, rec.ravel())
         self.clocks = Clocks(len(bases), self.p.clock_sigma, self.p.clock_drift)
-        self.dec = Decorrelator(self.p.sigma_gamma, self.p.sigma_omega, self.p.decor_gate)
+        self.dec = Decorrelator(sigma_gamma, sigma_omega, self.p.decor_gate)
         self.tracks = Tracks(self.p, self.sites.receiver)
         self.heap: list[tuple[float, int, int, ElementaryTracks]] = []
         self.serial = 0
@@ -85,6 +88,7 @@ class NetworkFusion:
         self.next_report = -np.inf
         self.rejected: dict[str, int] = {}
         self.waiting = 0
+        self.rounds = 0
 
     def _reject(self, reason: str, detail: str) -> Rejected:
         self.rejected[reason] = self.rejected.get(reason, 0) + 1
@@ -172,7 +176,7 @@ class NetworkFusion:
                 continue
             F = bistatic_F(dt)[:3, :3]
             x = tr.x[keep][:, :3] @ F.T
-            P = F @ tr.P[keep][:, :3, :3] @ F.T + bistatic_Q(dt, self.p.sigma_gamma, 0.0)[:3, :3]
+            P = F @ tr.P[keep][:, :3, :3] @ F.T + bistatic_Q(dt, self.sigma_gamma, 0.0)[:3, :3]
             zc, R = self.clocks.correct(b, x[:, :2], P[:, :2, :2])
             parts.append((np.full(x.shape[0], b), tr.id[keep], zc, R))
         if not parts:
@@ -187,7 +191,8 @@ class NetworkFusion:
         if with_left.size < 3 or np.unique(self.sites.receiver[with_left]).size < 2:
             return
         required = max(3, min(self.p.init_bases, with_left.size))
-        opened, waiting = initiate(left, self.sites, required, self.p)
+        self.rounds += 1
+        opened, waiting = initiate(left, self.sites, required, self.p, self.rounds)
         self.waiting += waiting
         for c in range(opened.members.shape[0]):
             x, P = opened.fix.x[c], opened.fix.P[c]

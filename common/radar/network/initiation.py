@@ -127,13 +127,13 @@ def _accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: Net
     return fix.ok & (n >= required) & (rec >= 2) & (fix.chi2 <= lim) & (fix.chi2_v <= lim_v)
 
 
-def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams
+def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, turn: int = 0
              ) -> tuple[Opened, int]:
-    """Steps 1-4: the accepted candidates, and the number of seed cells left for a later
-    round (max_cells at the finest level)."""
+    """Steps 1-4 in round `turn`: the accepted candidates, and the number of seed cells
+    left for a later round (max_cells at the finest level)."""
     B = sites.tx.shape[0]
     pts, cut = vote_cells(left.base, left.z[:, 0], np.sqrt(left.R[:, 0, 0]), sites.tx,
-                        sites.rx, sites.receiver, required, p)
+                        sites.rx, sites.receiver, required, p, turn)
     margin = 2 * np.sqrt(3.0) / 2 * p.cell_fine
     k = np.sqrt(chi2_gate(p.gate_prob, 1))
     members = np.full((pts.shape[0], B), -1)

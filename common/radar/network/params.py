@@ -1,45 +1,49 @@
-"""Parameters of the network fusion centre (docs/networks.md)."""
+"""Parameters of table `[radar.network]`: the network fusion centre of
+common.radar.network (docs/networks.md)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
+
+from common.core.params import PROB_OPEN, Params, Range, Rule, count, non_negative, order, positive
 
 
 @dataclass(frozen=True)
-class NetworkParams:
-    """Units: m, s, m/s.
+class NetworkParams(Params):
+    """Parameters of `[radar.network]`: the fusion centre of a network of receivers.
 
-    window: s, reordering window; a report is processed once a report stamped `window`
+    The centre serves deployments of several receivers or with range-Doppler bases
+    (common.radar.fusion_core); its decorrelation uses [radar.tracker]'s Q [20].
+
+    window: reordering window: a report is processed once a report stamped `window`
         later has arrived (or at `flush`); one older than the last processed time is
         rejected (`too_late`, counted).
-    sigma_gamma, sigma_omega: m/s^3, rad/s^2, Q [20] of the elementary trackers (the
-        decorrelation predicts their previous report with it).
     decor_gate: chi-square bound on an equivalent measurement against its prediction.
-    clock_sigma: s, prior sigma of a base's clock offset; clock_drift: s^2/s, random-walk
-        power of the offset (common.radar.network.clocks).
-    q, q_z: m^2/s^3, white-acceleration power of the CV model on (x, y) and on z.
+    clock_sigma: prior sigma of a base's clock offset (common.radar.network.clocks).
+    clock_drift: random-walk power of a base's clock offset.
+    q, q_z: white-acceleration power of the CV model on (x, y) and on z.
     gate_prob: probability of the chi-square gates of members and assignment.
     member_misses: consecutive out-of-gate reports after which a member is released.
-    init_period: s, between initiation rounds; stale: s, age beyond which a base's last
-        report is not used for initiation.
+    init_period: time between initiation rounds.
+    stale: age beyond which a base's last report is not used for initiation.
     init_bases: bases needed to open a track (capped to the bases with leftovers, never
-        below 3); init_prob: quantile of the residual chi-square tests of a candidate.
-    z_min, z_max: m, altitude bounds of the surveillance volume; volume_margin: m, its
-        horizontal extent beyond the sites' box; seed_z: m, altitudes of the extra
-        Gauss-Newton seeds of a seed cell.
-    cell_coarse, cell_fine: m, sides of the first and (at least) the last voting cells;
-        vote_slack: votes below the best cell's a cell may have and still be refined;
-        max_cells: cells refined per level (most voted first; the rest wait, counted).
-    max_sigma: m, worst position sigma beyond which a fix is degenerate.
-    cycle: s, confirmation cycle; confirm_cycles: cycles, each with updates from >= 3
-        bases over >= 2 receivers, to confirm.
-    coast, coast_tentative: s without update before deletion.
-    report_period: s, period of the global track reports.
+        below 3).
+    init_prob: quantile of the residual chi-square tests of a candidate.
+    z_min, z_max: altitude bounds of the surveillance volume.
+    volume_margin: horizontal extent of the volume beyond the sites' box.
+    seed_z: altitudes of the extra Gauss-Newton seeds of a seed cell.
+    cell_coarse, cell_fine: sides of the first and (at least) the last voting cells.
+    max_cells: cells refined per level (most voted first; the rest wait, counted).
+    max_sigma: worst position sigma beyond which a fix is degenerate.
+    cycle: confirmation cycle.
+    confirm_cycles: cycles, each with updates from >= 3 bases over >= 2 receivers, to
+        confirm.
+    coast, coast_tentative: time without update before deletion (confirmed, tentative).
+    report_period: period of the global track reports.
     """
 
     window: float = 2.0
-    sigma_gamma: float = 5.0
-    sigma_omega: float = 1e-3
     decor_gate: float = 30.0
     clock_sigma: float = 0.1
     clock_drift: float = 1e-6
@@ -57,7 +61,6 @@ class NetworkParams:
     seed_z: tuple[float, ...] = (3e3, 10e3)
     cell_coarse: float = 10e3
     cell_fine: float = 300.0
-    vote_slack: int = 1
     max_cells: int = 20000
     max_sigma: float = 10e3
     cycle: float = 1.0
@@ -65,3 +68,20 @@ class NetworkParams:
     coast: float = 5.0
     coast_tentative: float = 2.0
     report_period: float = 1.0
+
+    RANGES: ClassVar[dict[str, Range]] = {
+        "window": non_negative("s"), "decor_gate": positive("chi-square"),
+        "clock_sigma": non_negative("s"), "clock_drift": non_negative("s^2/s"),
+        "q": positive("m^2/s^3"), "q_z": positive("m^2/s^3"),
+        "gate_prob": PROB_OPEN, "member_misses": count(1), "init_period": non_negative("s"),
+        "stale": positive("s"), "init_bases": count(3), "init_prob": PROB_OPEN,
+        "z_min": Range("m", -500.0, 30e3), "z_max": Range("m", 0.0, 30e3, "(]"),
+        "volume_margin": non_negative("m"), "seed_z": Range("m", -500.0, 30e3),
+        "cell_coarse": positive("m"), "cell_fine": positive("m"), "max_cells": count(1),
+        "max_sigma": positive("m"), "cycle": positive("s"), "confirm_cycles": count(1),
+        "coast": positive("s"), "coast_tentative": positive("s"), "report_period": positive("s"),
+    }
+    RULES: ClassVar[tuple[Rule, ...]] = (
+        order("z_min", "z_max"), order("cell_fine", "cell_coarse", strict=False),
+        order("coast_tentative", "coast", strict=False),
+    )

@@ -10,11 +10,13 @@ ellipsoidal shell r_b,i +- k sigma_r,i reaches the cell:
 the turn of the unit vectors, so the test never refuses a cell the shell crosses). A
 cell's votes are its bases with a hit. From cells of `cell_coarse` over the box of the
 sites widened by `volume_margin` (z in the volume's bounds), each level keeps the cells
-with votes >= max(required, best - vote_slack) from >= 2 receivers, at most `max_cells`
-of the most voted, and halves them (8 children), down to `cell_fine`. An aircraft seen
-by every base leads the votes; one seen by fewer bases is found in a later round, once
-the first are opened and their leftovers are gone (a ghost cell collects fewer votes
-when there are fewer shells).
+with votes >= required from >= 2 receivers, at most `max_cells` of the most voted, and
+halves them (8 children), down to `cell_fine`. The floor is absolute: a floor relative
+to the best cell (best - slack) let a few ghost cells, rejected round after round, shut
+out every aircraft seen by fewer bases for good. Cells of equal votes are taken in an
+order that changes with the round (`turn`), so a saturated level (dense scenes: every
+cell crossed by a shell of every base) does not refine the same part of the volume in
+every round.
 """
 
 from __future__ import annotations
@@ -59,10 +61,12 @@ def votes(cells: np.ndarray, size: float, shells: list[tuple[np.ndarray, np.ndar
 
 
 def vote_cells(base: np.ndarray, r: np.ndarray, sigma: np.ndarray, tx: np.ndarray,
-               rx: np.ndarray, receiver: np.ndarray, required: int, p: NetworkParams
-               ) -> tuple[np.ndarray, int]:
+               rx: np.ndarray, receiver: np.ndarray, required: int, p: NetworkParams,
+               turn: int = 0) -> tuple[np.ndarray, int]:
     """Leaf cell centres (C, 3) of the leftovers (base (L,), range r (L,), sigma_r (L,)),
-    most voted first, and the number of leaf cells beyond max_cells (left for later)."""
+    most voted first (ties in the order of round `turn`), and the number of leaf cells
+    beyond max_cells (left for later)."""
+    rng = np.random.default_rng(turn)
     k = np.sqrt(chi2_gate(p.gate_prob, 1))
     shells = []
     for b in range(tx.shape[0]):
@@ -71,10 +75,10 @@ def vote_cells(base: np.ndarray, r: np.ndarray, sigma: np.ndarray, tx: np.ndarra
     cells, size = _grid(tx, rx, p), p.cell_coarse
     while True:
         n, n_rec = votes(cells, size, shells, tx, rx, receiver)
-        floor = max(required, int(n.max(initial=0)) - p.vote_slack)
-        keep = np.flatnonzero((n >= floor) & (n_rec >= 2))
+        keep = np.flatnonzero((n >= required) & (n_rec >= 2))
         cut = max(0, keep.size - p.max_cells)
-        cells = cells[keep[np.argsort(-n[keep], kind="stable")][:p.max_cells]]
+        order = np.lexsort((rng.permutation(keep.size), -n[keep]))
+        cells = cells[keep[order][:p.max_cells]]
         if size / 2 < p.cell_fine or cells.shape[0] == 0:
             return cells, cut
         size /= 2

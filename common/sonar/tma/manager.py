@@ -32,6 +32,7 @@ from common.core.rejection import Rejected
 from common.sonar.tma.bearings_only import Support
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, TWO_PI, Bounds
 from common.sonar.tma.constrained import CtmaParams, CycleOutput, TmaTracker
+from common.sonar.tma.operator_inputs import Accepted, ClearWhat, OperatorInputs
 
 
 @dataclass(frozen=True)
@@ -67,11 +68,13 @@ class TrackHistory:
 @dataclass(frozen=True)
 class TmaReport:
     """One TMA cycle of an array (seeds 002, 003): the latest solution of every live
-    track, as (track number, cycle output) in track order."""
+    track, as (track number, cycle output) in track order, and the (number, birth) of
+    every track of the cycle (common.sonar.tma.operator_inputs)."""
 
     t: float
     array: str
     solutions: list[tuple[int, CycleOutput]]
+    births: list[tuple[int, float]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -82,12 +85,15 @@ class TmaParams(Params):
     sample_dt: minimum spacing (s) of the bearings kept for TMA (0: keep all).
     own_keep: own-ship positions kept for matching btracks by time.
     max_pending: btracks messages that may wait for their own-ship position.
+    state_dir: folder where the service keeps the operator's TMA inputs of each array
+        (tma-<array>.json), read back at its start ("": not kept, a restart forgets them).
     """
 
     cycle_dt: float = 60.0
     sample_dt: float = 0.0
     own_keep: int = 64
     max_pending: int = 8
+    state_dir: str = ""
 
     RANGES: ClassVar[dict[str, Range]] = {
         "cycle_dt": non_negative("s"), "sample_dt": non_negative("s"),
@@ -189,9 +195,11 @@ def thin(t: np.ndarray, dt: float, t_prev: float) -> np.ndarray:
 @dataclass
 class TrackTma:
     """One confirmed track: its TmaTracker, the bearings buffered for its next cycle
-    (rows t, brg, sbrg, own_x, own_y), and its latest cycle output."""
+    (rows t, brg, sbrg, own_x, own_y), its latest cycle output and the configured
+    support values it started with."""
 
     tracker: TmaTracker
+    config_support: list[Support] = field(default_factory=list)
     t_last: float = -np.inf
     t_kept: float = -np.inf
     t_cycle: float = -np.inf
@@ -251,6 +259,7 @@ class TmaManager:
         self.pending: deque[BTracks] = deque()
         self.t_pushed = -np.inf
         self.cycles = 0
+        self.inputs = OperatorInputs()
 
     def add_own(self, t: float, x: float, y: float) -> None:
         """Own-ship position at detection time t."""
@@ -272,6 +281,7 @@ class TmaManager:
                 raise Rejected("bad_btrack", f"track {tr.id}: bearing x[0] not in [0, 2pi]")
         self.t_pushed = b.t
         self.pending.append(b)
+        self.inputs.observe(b.t, [(tr.id, tr.confirmed) for tr in b.tracks])
 
     def ready(self) -> tuple[list[BTracks], int]:
         """Queued btracks cycles whose own-ship position is known (in time order), and the
@@ -309,39 +319,66 @@ class TmaManager:
         for tid in live:
             trk = self.tracks.get(tid)
             if trk is None:
-                trk = self.tracks[tid] = TrackTma(TmaTracker(self.bounds, self.config))
-                trk.tracker.support.extend(self.support.supports(t))  # 002 claims 3-10
+                trk = self.tracks[tid] = TrackTma(TmaTracker(self.bounds, self.config),
+                                                  self.support.supports(t))  # 002 claims 3-10
+                self._apply(tid)
             h = histories.get(tid)
             if h is not None and h.status == "confirmed" and h.id == tid:
                 rows = h.rows
                 trk.add(rows[np.argsort(rows[:, 0], kind="stable")], self.params.sample_dt)
             self.cycles += trk.cycle(t, self.params.cycle_dt)
         sols = [(tid, trk.out) for tid, trk in sorted(self.tracks.items()) if trk.out is not None]
-        return TmaReport(t, self.array, sols)
+        births = [(tr.id, self.inputs.birth[tr.id]) for tr in b.tracks if tr.id in self.inputs.birth]
+        return TmaReport(t, self.array, sols, births)
 
-    def add_support(self, track: int, s: Support) -> None:
-        """Give a support value (002 claims 3-10) to its track: the value enters every
-        later TMA/CTMA solve of the track (unknown track: Rejected)."""
-        trk = self.tracks.get(track)
-        if trk is None:
-            raise Rejected("unknown_track", f"no TMA for track {track}")
-        trk.tracker.support.append(s)
+    def add_support(self, track: int, s: Support, birth: float | None = None) -> Accepted:
+        """Give a support value (002 claims 3-10) to a live track (of that birth, if
+        given): it enters every later TMA/CTMA solve of the track until the track ends
+        or the value is cleared (Rejected: common.sonar.tma.operator_inputs.resolve)."""
+        a = self.inputs.resolve(track, birth)
+        self.inputs.add_support(a, s)
+        self._apply(track)
+        return a
 
-    def set_bounds(self, b: Bounds, tid: int | None = None) -> list[int]:
+    def set_bounds(self, b: Bounds, tid: int | None = None, birth: float | None = None) -> list[int]:
         """Apply seed 003 bounds; returns the tracks changed.
 
-        Without ``tid``: the array's default for new tracks and every live track; with
-        it: that live track only (unknown track: Rejected). The bounds are those of the
-        track's current target leg: after a manoeuvre they bound the new leg, and the
-        earlier legs keep the bounds they had (003 claim 9), so the message needs no leg.
+        Without ``tid``: the array's default for the tracks without bounds of their own;
+        with it: that live track's own (of that birth, if given; else Rejected as by
+        :meth:`add_support`). The bounds are those of the track's current target leg:
+        after a manoeuvre they bound the new leg, and the earlier legs keep the bounds
+        they had (003 claim 9), so the message needs no leg.
         """
         if tid is None:
             self.bounds = b
+            self.inputs.set_default(b)
             ids = list(self.tracks)
-        elif tid in self.tracks:
-            ids = [tid]
         else:
-            raise Rejected("unknown_track", f"no TMA for track {tid}")
+            self.inputs.set_bounds(self.inputs.resolve(tid, birth), b)
+            ids = [tid] if tid in self.tracks else []
         for i in ids:
-            self.tracks[i].tracker.bounds = b
-        return ids
+            self._apply(i)
+        return [i for i in ids if self.tracks[i].tracker.bounds is b]
+
+    def clear(self, track: int, what: ClearWhat, birth: float | None = None) -> Accepted:
+        """Forget the operator's bounds, support values or both of a live track."""
+        a = self.inputs.resolve(track, birth)
+        self.inputs.clear(a, what)
+        self._apply(track)
+        return a
+
+    def restore(self, inputs: OperatorInputs) -> None:
+        """The operator inputs kept by a previous run (before any btracks cycle)."""
+        self.inputs = inputs
+        self.bounds = inputs.default or self.bounds
+
+    def _apply(self, tid: int) -> None:
+        """Bounds and support values of a track with a TMA: the operator's, else the
+        array's bounds and the configured support values."""
+        trk = self.tracks.get(tid)
+        if trk is None:
+            return
+        inp = self.inputs.of(tid)
+        own = inp.bounds if inp is not None else None
+        trk.tracker.bounds = own or self.bounds
+        trk.tracker.support[:] = [*trk.config_support, *(inp.support if inp is not None else ())]

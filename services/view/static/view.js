@@ -5,8 +5,6 @@
 // grid lines are capped, ellipses clipped, the track list truncated.
 "use strict";
 
-const COLOURS = { confirmed: "#66bb6a", tentative: "#b0bec5", coasting: "#ffa726" };
-const AMBIGUOUS = "#e040fb";
 const BASE_COLOURS = ["#4fc3f7", "#ffb74d", "#ba68c8", "#81c784", "#f06292", "#fff176"];
 const LEAD_S = 60;         // radar velocity vector: 60 s of motion
 const TMA_LEAD_S = 600;    // TMA course and speed vector: 10 min of motion
@@ -95,6 +93,7 @@ function render() {
   trackTable(g.tracks);
   details(g.tracks.find((k) => k.id === selected));
   sonar();
+  sonarTable();
   services();
   tick();
 }
@@ -192,15 +191,16 @@ function grid(ctx, canvas, xf) {
   const u = UNITS[unit], step = nice(canvas.width / xf.s / u / 10) * u;
   if (!fin(step) || step <= 0) return;
   ctx.strokeStyle = "#1b2834"; ctx.fillStyle = "#4b6075"; ctx.lineWidth = 1; ctx.font = "10px sans-serif";
-  const label = (v) => `${+(v / u).toPrecision(6)} ${unit}`;
+  const txt = (v) => `${+(v / u).toPrecision(6)} ${unit}`;
+  canvas.graticule = null;
   const x0 = Math.ceil(xf.wx(0) / step) * step, y0 = Math.ceil(xf.wy(canvas.height) / step) * step;
   for (let i = 0, v = x0; i < MAX_GRID && v < xf.wx(canvas.width); i++, v = x0 + i * step) {
     ctx.beginPath(); ctx.moveTo(xf.x(v), 0); ctx.lineTo(xf.x(v), canvas.height); ctx.stroke();
-    ctx.fillText(label(v), xf.x(v) + 2, canvas.height - 4);
+    label(ctx, canvas, txt(v), xf.x(v) + 2, canvas.height - 4);
   }
   for (let i = 0, v = y0; i < MAX_GRID && v < xf.wy(0); i++, v = y0 + i * step) {
     ctx.beginPath(); ctx.moveTo(0, xf.y(v)); ctx.lineTo(canvas.width, xf.y(v)); ctx.stroke();
-    ctx.fillText(label(v), 2, xf.y(v) - 2);
+    label(ctx, canvas, txt(v), 2, xf.y(v) - 2);
   }
 }
 
@@ -268,7 +268,8 @@ function drawPlan(geo, g) {
   n.box = box;
   const xf = planXf = transform(canvas, box, followed(canvas, g.tracks));
   ctx.clearRect(0, 0, canvas.width, canvas.height);
-  grid(ctx, canvas, xf);
+  canvas.labels = [];
+  (geo.origin ? graticule : grid)(ctx, canvas, xf, geo.origin);
   geo.bases.forEach((b, i) => {
     const c = BASE_COLOURS[i % BASE_COLOURS.length];
     ctx.strokeStyle = c; ctx.setLineDash([4, 4]); ctx.lineWidth = 1;
@@ -292,7 +293,7 @@ function drawPlan(geo, g) {
   });
   const truth = topics.truth_radar;
   if (layer("truth") && truth) {
-    ctx.strokeStyle = "#5c6bc0"; ctx.lineWidth = 1.5;
+    ctx.strokeStyle = PALETTE.truth; ctx.lineWidth = 1.5;
     truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 5));
   }
   drawTracks(ctx, xf, g.tracks);
@@ -312,24 +313,19 @@ function drawTracks(ctx, xf, tracks) {
   const groups = new Map();
   tracks.forEach((k) => {
     if (!fin(k.x[0]) || !fin(k.x[2])) return;  // no position: listed, not drawn
-    const c = COLOURS[k.status] || "#fff";
-    if (!groups.has(c)) groups.set(c, []);
-    groups.get(c).push(k);
+    if (!groups.has(k.status)) groups.set(k.status, []);
+    groups.get(k.status).push(k);
   });
   ctx.lineWidth = 1.5; ctx.font = "bold 12px sans-serif";
-  groups.forEach((ks, c) => {
+  groups.forEach((ks, status) => {
+    const c = COLOURS[status] || "#fff";
     ctx.strokeStyle = c; ctx.fillStyle = c;
     if (layer("trails")) {
       ctx.globalAlpha = 0.55; ctx.beginPath(); ks.forEach((k) => linePath(ctx, xf, k.trail)); ctx.stroke();
       ctx.globalAlpha = 1;
     }
     if (layer("ellipses")) ellipses(ctx, xf, ks.map((k) => [k.x[0], k.x[2], k.ell]));
-    ctx.beginPath();
-    ks.forEach((k) => {
-      const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
-      ctx.moveTo(px + 4, py); ctx.arc(px, py, 4, 0, 2 * Math.PI);
-    });
-    ctx.fill();
+    marks(ctx, xf, ks, status);
     ctx.beginPath();
     ks.forEach((k) => {
       if (!fin(k.x[1]) || !fin(k.x[3])) return;
@@ -337,7 +333,11 @@ function drawTracks(ctx, xf, tracks) {
       ctx.lineTo(xf.x(k.x[0] + k.x[1] * LEAD_S), xf.y(k.x[2] + k.x[3] * LEAD_S));
     });
     ctx.stroke();
-    ks.forEach((k) => ctx.fillText(`${k.id}${k.amb ? "?" : ""}`, xf.x(k.x[0]) + 7, xf.y(k.x[2]) - 7));
+    const W = ctx.canvas.width, H = ctx.canvas.height;
+    ks.forEach((k) => {  // labels of the tracks on the canvas, kept inside it
+      const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+      if (px >= 0 && px <= W && py >= 0 && py <= H) label(ctx, ctx.canvas, `${k.id}${k.amb ? "?" : ""}`, px + 7, py - 7);
+    });
   });
   groups.forEach((ks) => ks.forEach((k) => {
     const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
@@ -349,6 +349,16 @@ function drawTracks(ctx, xf, tracks) {
       ctx.strokeStyle = "#ffffff"; ctx.beginPath(); ctx.arc(px, py, 14, 0, 2 * Math.PI); ctx.stroke();
     }
   }));
+}
+
+function marks(ctx, xf, ks, status) {  // the status' shape cue (palette.js SHAPES)
+  ctx.beginPath();
+  ks.forEach((k) => {
+    const px = xf.x(k.x[0]), py = xf.y(k.x[2]);
+    if (status === "coasting") ctx.rect(px - 4, py - 4, 8, 8);
+    else { ctx.moveTo(px + 4, py); ctx.arc(px, py, 4, 0, 2 * Math.PI); }
+  });
+  status === "tentative" ? ctx.stroke() : ctx.fill();
 }
 
 $("plan").addEventListener("click", (ev) => {
@@ -374,138 +384,18 @@ $("follow").addEventListener("click", () => {
 });
 $("units").addEventListener("change", (ev) => { unit = ev.target.value; render(); });
 
-function select(id) { selected = id; render(); }
+// A label kept inside its canvas (shifted left or down when it would be cut at an edge);
+// every label drawn this frame is listed in canvas.labels ([text, x, y, width]).
+function label(ctx, canvas, text, x, y) {
+  const w = ctx.measureText(text).width, h = 11;
+  const lx = Math.min(Math.max(x, 2), canvas.width - w - 2), ly = Math.min(Math.max(y, h + 1), canvas.height - 3);
+  ctx.fillText(text, lx, ly);
+  (canvas.labels = canvas.labels || []).push([text, lx, ly, w]);
+}
+
+function select(id) { selected = id; selectedSonar = null; render(); }
 
 function course(vx, vy) { return fin(vx) && fin(vy) ? ((Math.atan2(vx, vy) * 180 / Math.PI) + 360) % 360 : NaN; }
-
-function trackTable(tracks) {
-  const shown = tracks.slice(0, MAX_ROWS);
-  $("tracks").replaceChildren(...shown.map((k) => {
-    const tr = document.createElement("tr");
-    tr.dataset.id = k.id; tr.dataset.status = k.status; tr.dataset.x = k.x[0]; tr.dataset.y = k.x[2];
-    tr.className = `status-${k.status}${k.amb ? " ambiguous" : ""}${k.id === selected ? " selected" : ""}`;
-    [k.id, k.status, dist(k.x[0]), dist(k.x[2]), dist(k.x[4]), num(speed(k.x[1], k.x[3]), 0), num(course(k.x[1], k.x[3]), 0)]
-      .forEach((c) => { const td = document.createElement("td"); td.textContent = c; tr.appendChild(td); });
-    tr.addEventListener("click", () => select(k.id));
-    return tr;
-  }));
-  $("tracks-more").textContent = tracks.length > MAX_ROWS ? `first ${MAX_ROWS} of ${tracks.length} tracks` : "";
-  $("unit-head").textContent = unit;
-}
-
-function details(k) {
-  const el = $("details");
-  el.dataset.id = k ? k.id : "";
-  if (!k) { el.textContent = selected === null ? "none: click a track on the plan or in the list" : `track ${selected} is gone`; return; }
-  const s = k.sig, x = k.x, e = k.ell || [null, null];
-  el.textContent = [
-    `track ${k.id}  ${k.status}${k.amb ? "  AMBIGUOUS" : ""}`,
-    `position  x ${dist(x[0])} ${unit}  y ${dist(x[2])} ${unit}  z ${dist(x[4])} ${unit}`,
-    `velocity  vx ${num(x[1], 1)}  vy ${num(x[3], 1)}  vz ${num(x[5], 1)} m/s`,
-    `          ${num(speed(x[1], x[3]), 1)} m/s, course ${num(course(x[1], x[3]), 1)} deg`,
-    `sigmas    x ${num(s[0], 0)}  y ${num(s[2], 0)}  z ${num(s[4], 0)} m`,
-    `          vx ${num(s[1], 1)}  vy ${num(s[3], 1)}  vz ${num(s[5], 1)} m/s`,
-    `2-sigma   ${num(e[0], 0)} x ${num(e[1], 0)} m`,
-    `etracks   ${k.et.map((t) => `${t[0]}:${t[1]}`).join(" ") || "none"}`,
-    `score     ${k.score}`,
-    `history   ${k.n} updates drawn, trail ${k.trail.length} points`,
-  ].join("\n");
-}
-
-// ---- sonar: waterfall and TMA plan per array ----
-function arrayPanel(id) {
-  let el = $(`array-${id}`);
-  if (el) return el;
-  const host = $("arrays");
-  host.querySelectorAll(".quiet").forEach((q) => q.remove());
-  el = document.createElement("div");
-  el.className = "array"; el.id = `array-${id}`;
-  el.innerHTML = `<h3>array ${id}</h3><div><div class="quiet">bearing-time waterfall (detections, bearing tracks) ` +
-    `<span class="age" data-topic="waterfall/${id}"></span></div>` +
-    `<canvas class="waterfall" width="560" height="320"></canvas></div>` +
-    `<div><div class="quiet">TMA: own ship, solutions, 2-sigma ellipses, course and speed ` +
-    `<span class="age" data-topic="tma/${id}"></span> <button class="fit">fit all</button></div>` +
-    `<canvas class="tma" width="420" height="320"></canvas><div class="sols"></div></div>`;
-  host.appendChild(el);
-  el.querySelector(".fit").addEventListener("click", () => fitAll(el.querySelector(".tma")));
-  return el;
-}
-
-function sonar() {
-  Object.keys(topics).filter((n) => n.startsWith("waterfall/") || n.startsWith("tma/")).forEach((n) => {
-    const id = n.split("/")[1], panel = arrayPanel(id);
-    if (n.startsWith("waterfall/")) waterfall(panel.querySelector(".waterfall"), topics[n]);
-    else tmaPlan(panel.querySelector(".tma"), topics[n], topics[`truth_sonar/${id}`]);
-  });
-}
-
-function waterfall(canvas, w) {
-  const ctx = canvas.getContext("2d"), W = canvas.width, H = canvas.height - 14;
-  ctx.clearRect(0, 0, canvas.width, canvas.height);
-  if (!w.rows.length) return;
-  const t1 = w.rows[w.rows.length - 1][0], t0 = Math.min(w.rows[0][0], t1 - 1);
-  const X = (b) => b / 360 * W, Y = (t) => (t1 - t) / (t1 - t0) * H;  // newest at the top
-  ctx.fillStyle = "#4b6075"; ctx.font = "10px sans-serif";
-  for (let b = 0; b <= 360; b += 45) { ctx.fillRect(X(b), 0, 1, H); ctx.fillText(`${b}`, Math.min(X(b) + 2, W - 18), H + 11); }
-  ctx.fillStyle = "#cfd8dc";
-  w.rows.forEach(([t, brgs]) => brgs.forEach((b) => ctx.fillRect(X(b) - 1, Y(t) - 1, 2, 2)));
-  const dt = w.rows.length > 1 ? (t1 - w.rows[0][0]) / (w.rows.length - 1) : 1;
-  Object.entries(w.tracks).forEach(([id, pts]) => {
-    // confirmed stretches as lines (broken at gaps of 3 scans and through North),
-    // tentative estimates as small marks
-    ctx.strokeStyle = COLOURS.confirmed; ctx.fillStyle = COLOURS.tentative; ctx.lineWidth = 1.5;
-    ctx.beginPath();
-    pts.forEach((p, j) => {
-      const q = pts[j - 1];
-      if (!p[2]) { ctx.fillRect(X(p[1]) - 1.5, Y(p[0]) - 0.5, 3, 1); return; }
-      const join = q && q[2] && p[0] - q[0] <= 3 * dt && Math.abs(p[1] - q[1]) <= 180;
-      join ? ctx.lineTo(X(p[1]), Y(p[0])) : ctx.moveTo(X(p[1]), Y(p[0]));
-    });
-    ctx.stroke();
-    const last = pts[pts.length - 1];
-    if (last[2]) { ctx.fillStyle = COLOURS.confirmed; ctx.fillText(id, X(last[1]) + 3, Y(last[0]) + 10); }
-  });
-}
-
-function tmaPlan(canvas, tma, truth) {
-  const ctx = canvas.getContext("2d");
-  // an unobservable range leaves the solution's position out of the extent
-  const pts = tma.sols.filter((s) => s.range_obs !== false).map((s) => [s.x, s.y]);
-  if (truth) truth.x.forEach((x, i) => pts.push([x, truth.y[i]]));
-  const box = robustBox(tma.own, pts, FLOOR_M.tma) || [-1e4, 1e4, -1e4, 1e4];
-  const xf = transform(canvas, box, null);
-  ctx.clearRect(0, 0, canvas.width, canvas.height);
-  grid(ctx, canvas, xf);
-  ctx.strokeStyle = "#e0e0e0"; ctx.lineWidth = 1.5;
-  polyline(ctx, xf, tma.own);
-  if (truth) {
-    ctx.strokeStyle = "#5c6bc0";
-    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 4));
-  }
-  const own = tma.own.length ? tma.own[tma.own.length - 1] : [0, 0], far = 2 * canvas.width / xf.s;
-  const lines = tma.sols.map((s) => {
-    const c = s.constrained ? "#4fc3f7" : COLOURS.confirmed, px = xf.x(s.x), py = xf.y(s.y);
-    const range = s.range_obs === false ? "range unobservable" : `${dist(s.range)} ${unit}`;
-    const text = `${s.track}: ${range} ${num(s.course, 0)}\u00b0 ${num(s.speed * 1.9438, 1)} kn`;
-    ctx.strokeStyle = c; ctx.fillStyle = c; ctx.font = "11px sans-serif";
-    if (s.range_obs === false) {  // what is known: the bearing, dashed from own ship
-      const b = Math.atan2(s.x - own[0], s.y - own[1]);
-      ctx.setLineDash([6, 4]); ctx.beginPath(); ctx.moveTo(xf.x(own[0]), xf.y(own[1]));
-      ctx.lineTo(xf.x(own[0] + far * Math.sin(b)), xf.y(own[1] + far * Math.cos(b))); ctx.stroke();
-      ctx.setLineDash([]);
-    }
-    ellipses(ctx, xf, [[s.x, s.y, s.ell]]);
-    ctx.beginPath(); ctx.arc(px, py, 3.5, 0, 2 * Math.PI); ctx.fill();
-    ctx.beginPath(); ctx.moveTo(px, py);
-    ctx.lineTo(xf.x(s.x + s.vx * TMA_LEAD_S), xf.y(s.y + s.vy * TMA_LEAD_S)); ctx.stroke();
-    ctx.fillText(text, px + 6, py - 6);
-    return text;
-  });
-  scaleBar(ctx, canvas, xf);
-  // the same lines under the plan: a solution off the canvas is still read
-  const list = canvas.parentElement.querySelector(".sols");
-  list.replaceChildren(...lines.map((t) => Object.assign(document.createElement("div"), { textContent: t })));
-}
 
 // ---- services: the table of pfusion status; red when a token goes without a normal end ----
 function uptime(s) {
