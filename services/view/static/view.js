@@ -39,14 +39,16 @@ function connect() {
   ws.onopen = () => { wsOpen = true; tick(); };
   ws.onclose = () => { wsOpen = false; tick(); setTimeout(connect, 1000); };
   ws.onmessage = (ev) => {
+    const t0 = performance.now();
     try {
       const m = JSON.parse(ev.data), now = nowS();
-      Object.assign(topics, m.topics);
+      timeline.take(m.topics);  // timeline.js: recorded, and shown unless paused
       Object.entries(m.ages || {}).forEach(([n, a]) => { got[n] = now - a; });
       if (m.limits) limits = m.limits;
       render();
     } finally {
       ws.send("ack");  // the server sends the next message only after this one is drawn
+      timeline.frameDone(performance.now() - t0);
     }
   };
 }
