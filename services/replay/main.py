@@ -12,6 +12,7 @@ from pathlib import Path
 import zenoh
 
 from common.bus.recording import RecordingError, RecordReader
+from common.bus.refusal import silence_causes
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 
@@ -40,7 +41,8 @@ def main(args: argparse.Namespace) -> int:
             return 2
         root = cfg.zenoh.root if args.config else reader.root
         with open_session(cfg.zenoh) as session:
-            wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
+            wait_alive(session, root, args.wait_alive, args.wait_timeout, stop,
+                       silence_causes(cfg.zenoh) if cfg.zenoh.auth is not None else "")
             try:
                 n = replay(session, reader, root, args.speed, stop)
             except RecordingError as e:

@@ -14,20 +14,35 @@ read for a whole lease is closed as expired, losing its samples in flight. With 
 the two waits came to 2 s and a loaded CI machine lost 3 plots of one base that way;
 with Zenoh's default of 5 s, the publishers' own sessions gave up (a normal subscriber
 lost 1517 of 3000 samples). With 250 ms the waits span 0.5 s (docs/faults.md,
-tests/integration/test_faults.py)."""
+tests/integration/test_faults.py).
+
+A secured router audits (unless ``--no-audit``): its own Zenoh log goes through
+common.bus.audit (common.bus.log_tap), which writes access-control denials and failed
+logins as rate-limited WARNING lines with identity, key and cause, and the router
+publishes their counts every METRICS_PERIOD_S on ``<root>/metrics/router/<identity>``
+(``rejected``), as services publish theirs (docs/security.md, "Audit")."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
+import os
+import time
+from typing import Any
 
 import zenoh
 
+from common.bus.audit import AUDIT_TARGETS, Audit
+from common.bus.log_tap import LogTap
+from common.bus.rust_log import init_zenoh_log, parse
+from common.bus.service import METRICS_PERIOD_S
 from common.bus.transport import stop_on_signals, zenoh_config
 from common.cli import load_config
 from common.deploy.acl import access_control
 from common.deploy.config import Config, ConfigError
+from common.wire import protocol
 
 log = logging.getLogger("router")
 STALLED_CLOSE_US = 250_000  # 8x under the shortest lease (transport.ROUTER_LEASE_MS)
@@ -42,6 +57,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                     "access control apply to this router")
     p.add_argument("--identity", help="this router's username towards --connect routers "
                                       "(router-<site>, docs/security.md)")
+    p.add_argument("--no-audit", dest="audit", action="store_false",
+                   help="a secured router without its audit of denials and failed logins")
 
 
 def router_config(args: argparse.Namespace, cfg: Config | None) -> zenoh.Config:
@@ -62,15 +79,33 @@ def router_config(args: argparse.Namespace, cfg: Config | None) -> zenoh.Config:
     return c
 
 
+def audit_metrics(audit: Audit, instance: str, started: float) -> dict[str, Any]:
+    """The audit's counters in the shape of a service's metrics (common.bus.service)."""
+    return {"v": protocol.VERSION, "t": 0.0, "service": "router", "instance": instance,
+            "in": 0, "out": 0, "rejected": dict(audit.counters), "missed": {},
+            "p50_ms": 0.0, "p99_ms": 0.0, "queue": 0, "up_s": time.monotonic() - started}
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args) if args.config else None
-    conf = router_config(args, cfg)
-    stop = stop_on_signals()
-    with zenoh.open(conf):
-        secure = cfg is not None and (cfg.zenoh.auth or cfg.zenoh.tls)
-        log.info("router listening on %s%s", ", ".join(args.listen),
-                 " (security of the deployment on)" if secure else "")
-        while not stop.wait(0.2):
-            pass
+    secure = cfg is not None and (cfg.zenoh.auth is not None or cfg.zenoh.tls is not None)
+    audit = Audit() if secure and args.audit else None
+    asked = parse(os.environ.get("RUST_LOG"))  # before the audit adds its own targets
+    with LogTap(audit, asked) if audit is not None else contextlib.nullcontext():
+        if audit is not None:
+            init_zenoh_log(AUDIT_TARGETS)
+        conf = router_config(args, cfg)
+        stop = stop_on_signals()
+        started = time.monotonic()
+        with zenoh.open(conf) as session:
+            log.info("router listening on %s%s", ", ".join(args.listen),
+                     " (security of the deployment on)" if secure else "")
+            key = f"{cfg.zenoh.root}/metrics/router/{args.identity or 'main'}" if cfg else ""
+            next_metrics = started + METRICS_PERIOD_S
+            while not stop.wait(0.2):
+                if audit is not None and time.monotonic() >= next_metrics:
+                    next_metrics += METRICS_PERIOD_S
+                    session.put(key, protocol.encode(audit_metrics(audit, key.rsplit("/", 1)[1],
+                                                                   started)))
     log.info("router stopped")
     return 0
