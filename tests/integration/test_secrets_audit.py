@@ -1,0 +1,183 @@
+"""No password in any output, and the router's audit (docs/security.md, "Credentials in
+logs" and "Audit"), on real processes of the secured deployment of test_security.py
+(mutual TLS, passwords, the generated access control) over loopback.
+
+Under RUST_LOG=trace (Zenoh's most verbose log, which prints the whole configuration
+at debug) the fusion router, a site router (which has a password of its own towards
+the fusion router), b1's plotter and elementary tracker, global fusion, the simulator
+and ``pfusion status`` run; every log file, every process's output, and the
+/proc/<pid>/cmdline and /proc/<pid>/environ of each while it runs hold no password of
+the dictionary, while the logs do hold Zenoh's trace lines (the level was in force).
+tests/bus/test_rust_log.py shows that the same check finds the password without the cap.
+
+A router under the default RUST_LOG (warn) writes one WARNING per refusal, naming the
+identity, the key and the cause: a wrong password, an unknown user, a denied put
+(200 of them: one line, all counted), a stolen password with another host's
+certificate; its counters arrive on metrics/router/main; Zenoh's debug and trace lines
+it reads for the audit do not reach its log. Time: about 20 s for the first, 10 s
+for the second on an idle machine."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import re
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from common.bus import transport
+from common.bus.procs import Child, pfusion_argv
+from common.bus.transport import Inbox, free_port, open_session, wait_port
+from common.cli import COMMANDS
+from common.deploy.acl import router_identity, site_identity
+from common.deploy.config import load
+from common.deploy.deployment import plan
+from common.wire import protocol
+from tests.integration.test_security import (
+    SCENARIO,
+    Secure,
+    connects,
+    deployment_files,
+    on_host,
+    put_all,
+    zc,
+)
+
+ROOT = "pf/v1"
+SCANS = 5
+
+
+def passwords(d: Path) -> list[str]:
+    return [line.partition(":")[2] for line in (d / "dictionary.txt").read_text().splitlines()
+            if line.strip()]
+
+
+@pytest.fixture
+def trace_env() -> Iterator[None]:
+    """RUST_LOG=trace for every child started meanwhile (children inherit os.environ)."""
+    before = os.environ.get("RUST_LOG")
+    os.environ["RUST_LOG"] = "trace"
+    try:
+        yield
+    finally:
+        if before is None:
+            del os.environ["RUST_LOG"]
+        else:
+            os.environ["RUST_LOG"] = before
+
+
+def proc_text(pid: int) -> str:
+    """A running process's command line and initial environment."""
+    return "".join(Path(f"/proc/{pid}/{f}").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+                   for f in ("cmdline", "environ"))
+
+
+def test_no_password_in_any_output_under_rust_log_trace(tmp_path: Path, trace_env: None) -> None:
+    fusion, site = deployment_files(tmp_path)
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    port, site_port = free_port(), free_port()
+    ep, site_ep = f"tls/127.0.0.1:{port}", f"tls/127.0.0.1:{site_port}"
+    children = [Child("router", "router", "--config", str(fusion), "--listen", ep,
+                      log=logs / "router.log")]
+    seen: dict[str, str] = {}
+    try:
+        wait_port(port, timeout=60.0)
+        children.append(Child("router-rx1", "router", "--config", str(site), "--identity",
+                              router_identity("rx1"), "--listen", site_ep, "--connect", ep,
+                              log=logs / "router-rx1.log"))
+        wait_port(site_port, timeout=60.0)
+        specs = [s for s in plan(load(fusion), str(fusion), COMMANDS)
+                 if s.name in ("channel-plotter/b1", "elementary-tracker/b1", "global-fusion")]
+        for s in specs:
+            children.append(Child(s.name, *s.argv, "--connect", site_ep if "b1" in s.name else ep,
+                                  log=logs / f"{s.name.replace('/', '-')}.log"))
+        sim = Child("simulate", "simulate", "--config", str(fusion), "--scenario", str(SCENARIO),
+                    "--scans", str(SCANS), "--connect", ep, "--wait-timeout", "120",
+                    *(a for s in specs for a in ("--wait-alive", s.alive)), log=logs / "simulate.log")
+        children.append(sim)
+        time.sleep(1.0)
+        for c in children:  # every process while it runs (the simulator waits for the others)
+            if c.alive():
+                seen[c.name] = proc_text(c.proc.pid)
+        assert sim.wait(240) == 0, (logs / "simulate.log").read_text()[-2000:]
+        status = subprocess.run(pfusion_argv("status", "--config", str(fusion), "--connect", ep),
+                                capture_output=True, text=True, timeout=120)
+        seen["status"] = status.stdout + status.stderr
+    finally:
+        for c in reversed(children):
+            c.stop()
+    for f in logs.glob("*.log"):
+        seen[f.name] = f.read_text(errors="replace")
+    assert len([n for n in seen if n.endswith(".log")]) == 6
+    assert {c.name for c in children} <= set(seen), sorted(seen)
+    seen = {name: re.sub(r"\x1b\[[0-9;]*m", "", text) for name, text in seen.items()}
+    for name, text in seen.items():
+        leaked = [pw for pw in passwords(tmp_path) if pw in text]
+        assert not leaked, f"a password in {name}"
+    for name in ("router.log", "router-rx1.log", "global-fusion.log", "simulate.log"):
+        assert " TRACE " in seen[name], f"RUST_LOG=trace was not in force in {name}"
+    assert " TRACE " in seen["status"]
+
+
+@pytest.fixture
+def audited(tmp_path: Path) -> Iterator[Secure]:
+    """The fusion router under the children's default RUST_LOG (warn)."""
+    fusion, site = deployment_files(tmp_path)
+    port = free_port()
+    ep = f"tls/127.0.0.1:{port}"
+    env = os.environ.pop("RUST_LOG", None)
+    try:
+        router = Child("router", "router", "--config", str(fusion), "--listen", ep,
+                       log=tmp_path / "router.log")
+    finally:
+        if env is not None:
+            os.environ["RUST_LOG"] = env
+    try:
+        wait_port(port, timeout=60.0)
+        yield Secure(tmp_path, fusion, site, load(fusion), ep)
+    finally:
+        router.stop()
+
+
+def test_router_audits_denials_and_failed_logins(audited: Secure,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    s = audited
+    monkeypatch.setattr(transport, "CONNECT_TIMEOUT_S", 3)
+    wrong = s.dir / "wrong.txt"
+    wrong.write_text("analyst:not-the-password\nnobody:x\n")
+    wrong.chmod(0o600)
+    good = zc(s, "analyst")
+    assert good.auth is not None
+    bad_auth = dataclasses.replace(good.auth, credentials=str(wrong))
+    assert not connects(dataclasses.replace(good, auth=bad_auth))
+    assert not connects(dataclasses.replace(good, identity="nobody", auth=bad_auth))
+    metrics = Inbox()
+    with open_session(good) as session:
+        session.declare_subscriber(f"{ROOT}/metrics/router/main", metrics.on_sample)
+        put_all(zc(s, site_identity("rx1")), ["radar/gtracks"] * 200, declared=False)
+        put_all(on_host(s, site_identity("rx1"), "host-rx2"), ["radar/plots/b1/c1"], declared=False)
+        deadline = time.monotonic() + 60
+        counts: dict[str, int] = {}
+        while not (counts.get("denied", 0) >= 200 and counts.get("no_subject", 0) >= 1):
+            assert time.monotonic() < deadline, counts
+            env = metrics.get(0.5)
+            if env is not None:
+                counts = protocol.unpack(env.payload)["rejected"]
+    assert counts["login_failed"] >= 2, counts
+    log = (s.dir / "router.log").read_text()
+    audit = [line.split("audit ", 2)[-1] for line in log.splitlines() if " WARNING audit: " in line]
+    assert "login_failed: identity analyst@host from 127.0.0.1:" in "\n".join(audit), log
+    assert any(a.startswith("login_failed: identity analyst@host") and a.endswith("(wrong password)")
+               for a in audit), audit
+    assert any(a.startswith("login_failed: identity nobody@host") and a.endswith("(unknown user)")
+               for a in audit), audit
+    denied = [a for a in audit if a.startswith("denied: identity site-rx1@host from ? key "
+                                               f"{ROOT}/radar/gtracks (Put ingress)")]
+    assert len(denied) == 1, audit  # 200 denials, one line in the period
+    assert any(a.startswith("no_subject: identity site-rx1@host-rx2 from 127.0.0.1:") for a in audit)
+    assert " TRACE " not in log and " DEBUG " not in log  # read for the audit, not written
