@@ -16,7 +16,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from common.bus.audit import Audit, Event, split
+from common.bus.audit import ACL, Audit, Event, split
 from common.bus.rust_log import Directive, enabled
 
 PIPE_BYTES = 1 << 20  # Zenoh's threads block on a full pipe: room for bursts of denials
@@ -47,8 +47,13 @@ class LogTap:
         return self
 
     def _read(self, fd: int) -> None:
+        # Zenoh writes a line per allowed message at the access control's TRACE: unless
+        # the operator asked for them, they are dropped before any parsing
+        allowed = None if enabled(self.asked, ACL, "trace") else b" is authorized to "
         with os.fdopen(fd, "rb") as pipe, os.fdopen(os.dup(self._out), "wb", buffering=0) as out:
             for raw in pipe:
+                if allowed is not None and allowed in raw:
+                    continue
                 line = raw.decode("utf-8", "replace")
                 parts = split(line)
                 if parts is None or enabled(self.asked, parts[2], parts[0]):
