@@ -13,6 +13,19 @@ refusal to what the same accepting thread logged just before: the remote address
 ZID (the InitSyn trace), the user (decoded from the usrpwd extension of the OpenSyn
 trace) and the certificate's common name (the TLS accept).
 
+Zenoh evaluates a key expression that a session declares (a publisher, subscriber,
+queryable, token) once for every kind of message (BLOCK of them, in one go on one
+thread), and writes a denial line for each kind the session may not use, whether or not
+it ever tries; a message on an undeclared key is evaluated, and written, one by one.
+So consecutive denials of one thread on one session, key and direction are grouped:
+one kind alone is a refused message (``denied``); a block that denies every kind on
+ingress for a key on and below which the identity has no right at all (``may_use``: a
+service declares the prefix of its wildcard keys too) is a session using a key it has
+no right to (``denied``); any other
+block is the routine map of what a session may not do with a key it declared
+(``key_denied``, counted, logged at DEBUG only). A declaration refused on a key where
+the identity has some other right is therefore only a ``key_denied``.
+
 Pure: lines and the time in, events and counters out (common.bus.log_tap does the I/O).
 """
 
@@ -20,6 +33,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter, OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 
 ACL = "zenoh::net::routing::interceptor::access_control"
@@ -30,6 +44,9 @@ PERIOD_S = 10.0  # one line per (kind, identity, key or cause) per period
 MAX_LINES = 50   # lines per period over all of them; the rest are counted, not written
 REMEMBERED = 1024  # connections (address, ZID, user, common name) kept for the joins
 USRPWD_EXT = 2  # the user/password sub-extension of the auth extension
+BLOCK = 9  # kinds of message Zenoh evaluates at once for a declared key expression
+GROUP_S = 0.2  # a group of denials that no line continued for this long is complete
+QUIET = ("key_denied",)  # kinds logged at DEBUG only: routine permission blocks
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")
 _LINE = re.compile(r"^\S+\s+(TRACE|DEBUG|INFO|WARN|ERROR)\s+(?:(\S+)\s+)?ThreadId\(\d+\)\s"
@@ -115,6 +132,18 @@ def subject_name(subject: str) -> str:
 
 
 @dataclass
+class _Group:
+    """Consecutive denials of one accepting thread on one session, key and direction."""
+
+    zid: str
+    identity: str
+    key: str
+    flow: str
+    actions: list[str]
+    since: float
+
+
+@dataclass
 class _Conn:
     remote: str = "?"
     zid: str = ""
@@ -130,11 +159,16 @@ class Audit:
     """Zenoh log lines in (:meth:`feed`), audit events and counters out; :meth:`lines`
     rate-limits them (PERIOD_S per kind, identity, key and cause; MAX_LINES per period)."""
 
-    def __init__(self, period_s: float = PERIOD_S, max_lines: int = MAX_LINES) -> None:
+    def __init__(self, period_s: float = PERIOD_S, max_lines: int = MAX_LINES,
+                 may_use: Callable[[str, str], bool] | None = None) -> None:
+        """``may_use(user, key)``: whether the access control gives ``user`` some right on
+        ``key`` or below it (a declared prefix of the keys it uses is no attempt)."""
+        self.may_use = may_use
         self.counters: Counter[str] = Counter()
         self.period_s, self.max_lines = period_s, max_lines
         self._conns: OrderedDict[str, _Conn] = OrderedDict()  # by remote address
         self._thread: dict[str, _Conn] = {}  # the connection each accepting thread works on
+        self._groups: dict[str, _Group] = {}  # denials being grouped, by routing thread
         self._last: dict[tuple[str, str, str, str], tuple[float, int]] = {}
         self._window = (0.0, 0)  # start of the current period, lines written in it
         self.suppressed = 0
@@ -146,33 +180,60 @@ class Audit:
             self._conns.popitem(last=False)
         return c
 
-    def feed(self, line: str) -> Event | None:
-        """One log line: the refusal it reports (counted), if any."""
+    def feed(self, line: str, now: float = 0.0) -> list[Event]:
+        """One log line at ``now`` (s, any clock): the refusals it completes (counted)."""
         parts = split(line)
         if parts is None:
-            return None
+            return self.flush(now)
         _, thread, target, msg = parts
-        event = None
+        events = self.flush(now)
         if target == ACL:
-            event = self._acl(msg)
+            events += self._acl(thread, msg, now)
         elif target == ACCEPT:
-            event = self._accept(thread, msg)
+            events += [e for e in [self._accept(thread, msg)] if e is not None]
         elif target == TLS:
-            event = self._tls(thread, msg)
-        if event is not None:
-            self.counters[event.kind] += 1
-        return event
+            events += [e for e in [self._tls(thread, msg)] if e is not None]
+        return self._count(events)
 
-    def _acl(self, msg: str) -> Event | None:
+    def flush(self, now: float) -> list[Event]:
+        """The refusals of permission groups that no line continued for GROUP_S."""
+        done = [t for t, g in self._groups.items() if now - g.since >= GROUP_S]
+        return self._count([self._close(self._groups.pop(t)) for t in done])
+
+    def _count(self, events: list[Event]) -> list[Event]:
+        for e in events:
+            self.counters[e.kind] += 1
+        return events
+
+    def _acl(self, thread: str, msg: str, now: float) -> list[Event]:
         if m := _DENIED.match(msg):
-            return Event("denied", subject_name(m.group(2)), m.group(5),
-                         f"{m.group(3)} {m.group(4)}")
+            zid, subject, action, flow, key = m.groups()
+            g = self._groups.get(thread)
+            if g is not None and (g.zid, g.key, g.flow) == (zid, key, flow) \
+                    and action not in g.actions:
+                g.actions.append(action)
+                return [self._close(self._groups.pop(thread))] if len(g.actions) == BLOCK else []
+            out = [self._close(self._groups.pop(thread))] if g is not None else []
+            self._groups[thread] = _Group(zid, subject_name(subject), key, flow, [action], now)
+            return out
         if m := _NO_SUBJECT.match(msg):
             zid = m.group(1)
             conn = next((c for c in reversed(self._conns.values()) if c.zid == zid), _Conn())
-            return Event("no_subject", conn.who, "*", f"zid {zid} matches no ACL subject: "
-                                                      "everything it sends is denied", conn.remote)
-        return None
+            return [Event("no_subject", conn.who, "*", f"zid {zid} matches no ACL subject: "
+                                                       "everything it sends is denied", conn.remote)]
+        return []
+
+    def _close(self, g: _Group) -> Event:
+        """A single refused message, or a permission block (Zenoh evaluates every kind of
+        message at once for a key expression a session declares): a block that denies
+        every kind on ingress means the session used a key it has no right to at all."""
+        if len(g.actions) == 1 and not g.actions[0].startswith("Declare/Undeclare"):
+            return Event("denied", g.identity, g.key, f"{g.actions[0]} {g.flow}")
+        user = g.identity.split("@", 1)[0]
+        if len(g.actions) == BLOCK and g.flow == "ingress" and not (
+                self.may_use is not None and self.may_use(user, g.key)):
+            return Event("denied", g.identity, g.key, "no right at all on this key, ingress")
+        return Event("key_denied", g.identity, g.key, f"may not: {', '.join(g.actions)} ({g.flow})")
 
     def _accept(self, thread: str, msg: str) -> Event | None:
         if m := _ESTABLISH.match(msg):

@@ -11,12 +11,14 @@ from __future__ import annotations
 import fcntl
 import logging
 import os
+import select
 import sys
 import threading
 import time
 from collections.abc import Callable
+from typing import BinaryIO
 
-from common.bus.audit import ACL, Audit, Event, split
+from common.bus.audit import ACL, GROUP_S, QUIET, Audit, Event, split
 from common.bus.rust_log import Directive, enabled
 
 PIPE_BYTES = 1 << 20  # Zenoh's threads block on a full pipe: room for bursts of denials
@@ -50,23 +52,37 @@ class LogTap:
         # Zenoh writes a line per allowed message at the access control's TRACE: unless
         # the operator asked for them, they are dropped before any parsing
         allowed = None if enabled(self.asked, ACL, "trace") else b" is authorized to "
-        with os.fdopen(fd, "rb") as pipe, os.fdopen(os.dup(self._out), "wb", buffering=0) as out:
-            for raw in pipe:
-                if allowed is not None and allowed in raw:
-                    continue
-                line = raw.decode("utf-8", "replace")
-                parts = split(line)
-                if parts is None or enabled(self.asked, parts[2], parts[0]):
-                    out.write(raw)
-                if parts is None:
-                    continue
-                event = self.audit.feed(line)
-                if event is None:
-                    continue
-                if self.on_event is not None:
-                    self.on_event(event)
-                for text in self.audit.lines(event, time.monotonic()):
-                    log.warning("%s", text)
+        rest = b""
+        with os.fdopen(os.dup(self._out), "wb", buffering=0) as out:
+            while True:
+                ready, _, _ = select.select([fd], [], [], GROUP_S)
+                chunk = os.read(fd, 1 << 16) if ready else b""
+                if ready and not chunk:
+                    break
+                *lines, rest = (rest + chunk).split(b"\n")
+                for raw in lines:
+                    if allowed is None or allowed not in raw:
+                        self._line(raw + b"\n", out)
+                self._report(self.audit.flush(time.monotonic()))
+            if rest:
+                self._line(rest, out)
+            self._report(self.audit.flush(float("inf")))
+        os.close(fd)
+
+    def _line(self, raw: bytes, out: BinaryIO) -> None:
+        line = raw.decode("utf-8", "replace")
+        parts = split(line)
+        if parts is None or enabled(self.asked, parts[2], parts[0]):
+            out.write(raw)
+        if parts is not None:
+            self._report(self.audit.feed(line, time.monotonic()))
+
+    def _report(self, events: list[Event]) -> None:
+        for event in events:
+            if self.on_event is not None:
+                self.on_event(event)
+            for text in self.audit.lines(event, time.monotonic()):
+                log.log(logging.DEBUG if event.kind in QUIET else logging.WARNING, "%s", text)
 
     def __exit__(self, *_: object) -> None:
         """Give standard output back; the reader ends with the pipe (Zenoh's logger

@@ -30,6 +30,7 @@ import json
 import logging
 import os
 import time
+from collections.abc import Callable
 from typing import Any
 
 import zenoh
@@ -86,10 +87,31 @@ def audit_metrics(audit: Audit, instance: str, started: float) -> dict[str, Any]
             "p50_ms": 0.0, "p99_ms": 0.0, "queue": 0, "up_s": time.monotonic() - started}
 
 
+def may_use(acl: dict[str, Any]) -> Callable[[str, str], bool]:
+    """Whether the access control ``acl`` gives a user some ingress right (to send or
+    declare) on a key or below it."""
+    rules = {r["id"]: r["key_exprs"] if "ingress" in r["flows"] else [] for r in acl.get("rules", [])}
+    keys: dict[str, list[zenoh.KeyExpr]] = {}
+    for p in acl.get("policies", []):
+        for subject in p["subjects"]:
+            keys.setdefault(subject, []).extend(zenoh.KeyExpr(k) for r in p["rules"] for k in rules[r])
+
+    def check(user: str, key: str) -> bool:
+        try:
+            here, below = zenoh.KeyExpr(key), zenoh.KeyExpr(f"{key}/**")
+        except zenoh.ZError:
+            return False
+        return any(k.intersects(here) or k.intersects(below) for k in keys.get(user, []))
+
+    return check
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args) if args.config else None
     secure = cfg is not None and (cfg.zenoh.auth is not None or cfg.zenoh.tls is not None)
-    audit = Audit() if secure and args.audit else None
+    acl = access_control(cfg) if cfg is not None and cfg.zenoh.auth is not None \
+        and cfg.zenoh.auth.access_control else {}
+    audit = Audit(may_use=may_use(acl)) if secure and args.audit else None
     asked = parse(os.environ.get("RUST_LOG"))  # before the audit adds its own targets
     with LogTap(audit, asked) if audit is not None else contextlib.nullcontext():
         if audit is not None:

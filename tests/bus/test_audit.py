@@ -1,11 +1,13 @@
 """common.bus.audit on lines Zenoh 1.10.2 wrote (a router's log under RUST_LOG=trace,
 shortened where marked ...): denials, a session that matches no subject and failed
 logins become events with identity, key and cause; the user is decoded from the
-OpenSyn's usrpwd extension; lines are rate-limited per (kind, identity, key, cause)."""
+OpenSyn's usrpwd extension; lines are rate-limited per (kind, identity, key, cause). Denials of one key expression's
+permission block (every kind of message at once, when a session declares it) are
+told apart from refused messages."""
 
 from __future__ import annotations
 
-from common.bus.audit import Audit, auth_user, split
+from common.bus.audit import GROUP_S, Audit, Event, auth_user, split
 
 E = "\x1b[2m"  # Zenoh colours its log unless NO_COLOR is set
 TLS_OK = ("2026-11-28T03:19:09.625690Z DEBUG acc-0 ThreadId(05) zenoh_link_tls::unicast: "
@@ -54,34 +56,71 @@ def test_the_user_is_read_from_the_usrpwd_extension() -> None:
     assert auth_user(INIT) is None
 
 
+def one(events: list[Event]) -> Event:
+    assert len(events) == 1, events
+    return events[0]
+
+
 def test_events_name_identity_key_and_cause() -> None:
     a = Audit()
-    assert [a.feed(line) for line in (TLS_OK, INIT, OPEN)] == [None, None, None]
-    e = a.feed(BAD_PASSWORD)
-    assert e is not None and (e.kind, e.identity, e.source, e.cause) == (
+    assert [a.feed(line) for line in (TLS_OK, INIT, OPEN)] == [[], [], []]
+    e = one(a.feed(BAD_PASSWORD))
+    assert (e.kind, e.identity, e.source, e.cause) == (
         "login_failed", "u1@host", "127.0.0.1:57982", "wrong password")
-    e = a.feed(NO_SUBJECT)
-    assert e is not None and (e.kind, e.identity, e.source) == ("no_subject", "u1@host", "127.0.0.1:57982")
-    e = a.feed(DENIED)
-    assert e is not None and (e.kind, e.identity, e.key, e.cause) == (
+    e = one(a.feed(NO_SUBJECT))
+    assert (e.kind, e.identity, e.source) == ("no_subject", "u1@host", "127.0.0.1:57982")
+    assert a.feed(DENIED, 1.0) == []  # held: the first of a permission block?
+    assert a.feed(ALLOWED, 1.0) == []
+    e = one(a.flush(1.5))  # alone for more than GROUP_S: one refused message
+    assert (e.kind, e.identity, e.key, e.cause) == (
         "denied", "site-rx1@host", "pf/v1/radar/gtracks", "Put ingress")
-    assert a.feed(ALLOWED) is None
-    e = a.feed(NO_AUTH)  # another thread: nothing known of its connection
-    assert e is not None and (e.identity, e.cause) == ("?@?", "no user/password")
-    e = a.feed(BAD_CERT)
-    assert e is not None and (e.kind, e.cause) == ("tls_refused", "invalid peer certificate: UnknownIssuer")
+    e = one(a.feed(NO_AUTH, 2.0))  # another thread: nothing known of its connection
+    assert (e.identity, e.cause) == ("?@?", "no user/password")
+    e = one(a.feed(BAD_CERT, 2.0))
+    assert (e.kind, e.cause) == ("tls_refused", "invalid peer certificate: UnknownIssuer")
     assert dict(a.counters) == {"login_failed": 2, "no_subject": 1, "denied": 1, "tls_refused": 1}
+
+
+KINDS = ["Query", "Reply", "Put", "Delete", "Declare/Undeclare Subscriber",
+         "Declare/Undeclare Queryable", "Declare/Undeclare Liveliness Token", "Liveliness Query",
+         "Declare Liveliness Subscriber"]
+
+
+def block(kinds: list[str], flow: str = "ingress", key: str = "pf/v1/radar/gtracks") -> list[str]:
+    """The denial lines of one key expression's permission block (Zenoh's order)."""
+    return [DENIED.replace("Put (ingress)", f"{k} ({flow})").replace("pf/v1/radar/gtracks", key)
+            for k in kinds]
+
+
+def test_repeated_messages_are_each_a_denial_permission_blocks_are_not() -> None:
+    a = Audit()
+    events = [e for line in [DENIED] * 3 for e in a.feed(line)] + a.flush(GROUP_S)
+    assert [e.kind for e in events] == ["denied"] * 3
+    # a key the session declared, on which it may put and subscribe but do nothing else
+    routine = [k for k in KINDS if k not in ("Put", "Declare/Undeclare Subscriber")]
+    events = [e for line in block(routine) for e in a.feed(line, 1.0)] + a.flush(2.0)
+    e = one(events)
+    assert (e.kind, e.cause) == ("key_denied", f"may not: {', '.join(routine)} (ingress)")
+    # a key it may do nothing with (a subscriber on another site's plots, a forged token)
+    events = [e for line in block(KINDS, key="pf/v1/alive/tma/a2") for e in a.feed(line, 3.0)]
+    e = one(events)  # complete at the ninth kind
+    assert (e.kind, e.key, e.cause) == ("denied", "pf/v1/alive/tma/a2",
+                                        "no right at all on this key, ingress")
+    events = [e for line in block(KINDS, "egress") for e in a.feed(line, 4.0)]
+    assert one(events).kind == "key_denied"  # what the router does not send it: routine
+    assert a.counters["denied"] == 4 and a.counters["key_denied"] == 2
 
 
 def test_lines_are_rate_limited() -> None:
     a = Audit(period_s=10.0, max_lines=3)
-    e = a.feed(DENIED)
-    assert e is not None
+    e = one(a.feed(DENIED) + a.flush(GROUP_S))
     assert a.lines(e, 0.0) == [e.line]
     assert [a.lines(e, t) for t in (1.0, 2.0, 9.9)] == [[], [], []]
     assert a.lines(e, 10.0) == [e.line + "; 3 more since the last line"]
-    other = [a.feed(DENIED.replace("radar/gtracks", f"radar/plots/b9/c{i}")) for i in range(4)]
-    written = [line for o in other if o is not None for line in a.lines(o, 11.0)]
+    other = [e for i in range(4)
+             for e in a.feed(DENIED.replace("radar/gtracks", f"radar/plots/b9/c{i}"))]
+    other += a.flush(GROUP_S)
+    written = [line for o in other for line in a.lines(o, 11.0)]
     assert len(written) == 2  # with the first of the period, 3 lines in it
     assert a.lines(e, 21.0)[0].startswith("audit: 2 more line(s) not written")
     assert a.counters["denied"] == 5

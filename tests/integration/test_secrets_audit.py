@@ -13,7 +13,8 @@ tests/bus/test_rust_log.py shows that the same check finds the password without 
 A router under the default RUST_LOG (warn) writes one WARNING per refusal, naming the
 identity, the key and the cause: a wrong password, an unknown user, a denied put
 (200 of them: one line, all counted), a stolen password with another host's
-certificate; its counters arrive on metrics/router/main; Zenoh's debug and trace lines
+certificate, a subscriber on a key the identity has no right to; not the routine
+permission blocks of keys a session declares; its counters arrive on metrics/router/main; Zenoh's debug and trace lines
 it reads for the audit do not reach its log. Time: about 20 s for the first, 10 s
 for the second on an idle machine."""
 
@@ -33,10 +34,11 @@ from common.bus import transport
 from common.bus.procs import Child, pfusion_argv
 from common.bus.transport import Inbox, free_port, open_session, wait_port
 from common.cli import COMMANDS
-from common.deploy.acl import router_identity, site_identity
+from common.deploy.acl import access_control, router_identity, site_identity
 from common.deploy.config import load
 from common.deploy.deployment import plan
 from common.wire import protocol
+from services.router.main import may_use
 from tests.integration.test_security import (
     SCENARIO,
     Secure,
@@ -161,6 +163,9 @@ def test_router_audits_denials_and_failed_logins(audited: Secure,
         session.declare_subscriber(f"{ROOT}/metrics/router/main", metrics.on_sample)
         put_all(zc(s, site_identity("rx1")), ["radar/gtracks"] * 200, declared=False)
         put_all(on_host(s, site_identity("rx1"), "host-rx2"), ["radar/plots/b1/c1"], declared=False)
+        with open_session(zc(s, "viewer")) as viewer:  # a key the viewer may not use at all
+            viewer.declare_subscriber(f"{ROOT}/radar/plots/b1/c1", lambda _: None)
+            time.sleep(0.5)
         deadline = time.monotonic() + 60
         counts: dict[str, int] = {}
         while not (counts.get("denied", 0) >= 200 and counts.get("no_subject", 0) >= 1):
@@ -180,4 +185,21 @@ def test_router_audits_denials_and_failed_logins(audited: Secure,
                                                f"{ROOT}/radar/gtracks (Put ingress)")]
     assert len(denied) == 1, audit  # 200 denials, one line in the period
     assert any(a.startswith("no_subject: identity site-rx1@host-rx2 from 127.0.0.1:") for a in audit)
+    assert any(a == f"denied: identity viewer@host from ? key {ROOT}/radar/plots/b1/c1 (no right "
+                    "at all on this key, ingress)" for a in audit), audit
+    # the analyst's subscription to the router's metrics: a routine permission block
+    assert not [a for a in audit if "analyst@host" in a and "login_failed" not in a], audit
+    assert counts.get("key_denied", 0) >= 1
     assert " TRACE " not in log and " DEBUG " not in log  # read for the audit, not written
+
+
+def test_a_declared_prefix_of_allowed_keys_is_no_attempt(tmp_path: Path) -> None:
+    """A plotter subscribed to radar/plots/b1/* declares the prefix radar/plots/b1 too, on
+    which Zenoh denies every kind of message: the audit asks the access control whether
+    the identity has some right on or below a key before calling it an attempt."""
+    fusion, _ = deployment_files(tmp_path)
+    check = may_use(access_control(load(fusion)))
+    assert check("channel-plotter-b1", f"{ROOT}/radar/plots/b1")
+    assert check("global-fusion", f"{ROOT}/radar/etracks")
+    assert not check("viewer", f"{ROOT}/radar/plots/b1/c1")
+    assert not check("site-rx1", f"{ROOT}/radar/gtracks") and not check("nobody", ROOT)
