@@ -15,9 +15,11 @@ radar/gtracks): the rate at which the audited router absorbs them (the time unti
 Goals (exit 1 when one fails): nothing missed; the audited router keeps >= 50 % of the
 unaudited throughput; every denied put is counted.
 
-Measured 2026-11-28 (2 shared cores, load average about 10, n = 20,000): 143 k
-samples/s without the audit, 81 k with it (56 %); router CPU 1.5 us per sample without,
-8.5 us with; a flood of denied puts absorbed at 36 k/s, every one counted.
+Measured 2026-11-28 (2 cores shared with other work, load average 10 to 12; n = 20,000
+and 50,000): router CPU about 1 us per sample without the audit, 6 to 8.5 us with it;
+throughput with the audit from 56 % to above 100 % of the run without, as the load
+varied (the CPU figure is the stable one); denied floods absorbed at 8 k to 36 k puts/s,
+every one counted.
 
 Run: .venv/bin/python benchmarks/router_audit.py [--n N]
 """
