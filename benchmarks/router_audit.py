@@ -10,7 +10,7 @@ TLS, passwords, the generated access control), once with its audit and once with
 put to the last sample received, missed samples, the router's CPU seconds (user +
 system, /proc) per 10,000 samples. Then a flood of N denied puts (site rx1 on
 radar/gtracks): the rate at which the audited router absorbs them (the time until its
-``denied`` counter, published on metrics/router/main, reaches N).
+``denied`` counter, queried on audit/router/main, reaches N).
 
 Goals (exit 1 when one fails): nothing missed; the audited router keeps >= 50 % of the
 unaudited throughput; every denied put is counted.
@@ -72,17 +72,16 @@ def throughput(s: Secure, pid: int, n: int) -> tuple[float, int, float]:
 
 def flood(s: Secure, n: int) -> tuple[float, int]:
     """(denied puts absorbed per second, denied counted) for n puts the ACL denies."""
-    metrics = Inbox()
     with open_session(zc(s, "analyst")) as watch, open_session(zc(s, "site-rx1")) as site:
-        watch.declare_subscriber(f"{ROOT}/metrics/router/main", metrics.on_sample)
         t0 = time.perf_counter()
         for _ in range(n):
             site.put(f"{ROOT}/radar/gtracks", bytes(200), congestion_control=BLOCK)
         denied, deadline = 0, time.monotonic() + 120
         while denied < n and time.monotonic() < deadline:
-            env = metrics.get(0.5)
-            if env is not None:
-                denied = int(protocol.unpack(env.payload)["rejected"].get("denied", 0))
+            time.sleep(0.2)
+            replies = [r.ok for r in watch.get(f"{ROOT}/audit/router/main", timeout=5.0) if r.ok]
+            if replies:
+                denied = int(protocol.unpack(replies[0].payload.to_bytes())["rejected"].get("denied", 0))
         return n / (time.perf_counter() - t0), denied
 
 

@@ -33,6 +33,12 @@ class LogTap:
         self.audit, self.asked, self.on_event = audit, asked, on_event
         self._out = -1
         self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()  # the audit is fed by the reader, read by counters()
+
+    def counters(self) -> dict[str, int]:
+        """A copy of the audit's counters."""
+        with self._lock:
+            return dict(self.audit.counters)
 
     def __enter__(self) -> LogTap:
         sys.stdout.flush()
@@ -63,10 +69,12 @@ class LogTap:
                 for raw in lines:
                     if allowed is None or allowed not in raw:
                         self._line(raw + b"\n", out)
-                self._report(self.audit.flush(time.monotonic()))
+                with self._lock:
+                    self._report(self.audit.flush(time.monotonic()))
             if rest:
                 self._line(rest, out)
-            self._report(self.audit.flush(float("inf")))
+            with self._lock:
+                self._report(self.audit.flush(float("inf")))
         os.close(fd)
 
     def _line(self, raw: bytes, out: BinaryIO) -> None:
@@ -75,7 +83,8 @@ class LogTap:
         if parts is None or enabled(self.asked, parts[2], parts[0]):
             out.write(raw)
         if parts is not None:
-            self._report(self.audit.feed(line, time.monotonic()))
+            with self._lock:
+                self._report(self.audit.feed(line, time.monotonic()))
 
     def _report(self, events: list[Event]) -> None:
         for event in events:

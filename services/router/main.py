@@ -19,8 +19,10 @@ tests/integration/test_faults.py).
 A secured router audits (unless ``--no-audit``): its own Zenoh log goes through
 common.bus.audit (common.bus.log_tap), which writes access-control denials and failed
 logins as rate-limited WARNING lines with identity, key and cause, and the router
-publishes their counts every METRICS_PERIOD_S on ``<root>/metrics/router/<identity>``
-(``rejected``), as services publish theirs (docs/security.md, "Audit")."""
+answers queries on ``<root>/audit/router/<identity>`` with their counts (``rejected``
+of a service's metrics). A queryable, not samples on ``metrics/**``: those would reach
+every root subscriber and show the router in the view as a service without liveliness
+(docs/security.md, "Audit")."""
 
 from __future__ import annotations
 
@@ -38,8 +40,7 @@ import zenoh
 from common.bus.audit import AUDIT_TARGETS, Audit
 from common.bus.log_tap import LogTap
 from common.bus.rust_log import init_zenoh_log, parse
-from common.bus.service import METRICS_PERIOD_S
-from common.bus.transport import stop_on_signals, zenoh_config
+from common.bus.transport import Inbox, stop_on_signals, zenoh_config
 from common.cli import load_config
 from common.deploy.acl import access_control
 from common.deploy.config import Config, ConfigError
@@ -80,10 +81,10 @@ def router_config(args: argparse.Namespace, cfg: Config | None) -> zenoh.Config:
     return c
 
 
-def audit_metrics(audit: Audit, instance: str, started: float) -> dict[str, Any]:
+def audit_metrics(counters: dict[str, int], instance: str, started: float) -> dict[str, Any]:
     """The audit's counters in the shape of a service's metrics (common.bus.service)."""
     return {"v": protocol.VERSION, "t": 0.0, "service": "router", "instance": instance,
-            "in": 0, "out": 0, "rejected": dict(audit.counters), "missed": {},
+            "in": 0, "out": 0, "rejected": counters, "missed": {},
             "p50_ms": 0.0, "p99_ms": 0.0, "queue": 0, "up_s": time.monotonic() - started}
 
 
@@ -111,10 +112,10 @@ def main(args: argparse.Namespace) -> int:
     secure = cfg is not None and (cfg.zenoh.auth is not None or cfg.zenoh.tls is not None)
     acl = access_control(cfg) if cfg is not None and cfg.zenoh.auth is not None \
         and cfg.zenoh.auth.access_control else {}
-    audit = Audit(may_use=may_use(acl)) if secure and args.audit else None
-    asked = parse(os.environ.get("RUST_LOG"))  # before the audit adds its own targets
-    with LogTap(audit, asked) if audit is not None else contextlib.nullcontext():
-        if audit is not None:
+    tap = LogTap(Audit(may_use=may_use(acl)), parse(os.environ.get("RUST_LOG"))) \
+        if secure and args.audit else None  # RUST_LOG read before the audit adds its targets
+    with tap if tap is not None else contextlib.nullcontext():
+        if tap is not None:
             init_zenoh_log(AUDIT_TARGETS)
         conf = router_config(args, cfg)
         stop = stop_on_signals()
@@ -122,12 +123,14 @@ def main(args: argparse.Namespace) -> int:
         with zenoh.open(conf) as session:
             log.info("router listening on %s%s", ", ".join(args.listen),
                      " (security of the deployment on)" if secure else "")
-            key = f"{cfg.zenoh.root}/metrics/router/{args.identity or 'main'}" if cfg else ""
-            next_metrics = started + METRICS_PERIOD_S
+            queries, instance = Inbox(), args.identity or "main"
+            counts = session.declare_queryable(f"{cfg.zenoh.root}/audit/router/{instance}",
+                                               queries.on_query) if tap and cfg else None
             while not stop.wait(0.2):
-                if audit is not None and time.monotonic() >= next_metrics:
-                    next_metrics += METRICS_PERIOD_S
-                    session.put(key, protocol.encode(audit_metrics(audit, key.rsplit("/", 1)[1],
-                                                                   started)))
+                while tap is not None and (env := queries.get(0.0)) is not None:
+                    env.query.reply(env.key, protocol.encode(
+                        audit_metrics(tap.counters(), instance, started)))
+            if counts is not None:
+                counts.undeclare()
     log.info("router stopped")
     return 0
