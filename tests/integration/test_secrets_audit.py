@@ -11,7 +11,8 @@ the dictionary, while the logs do hold Zenoh's trace lines (the level was in for
 tests/bus/test_rust_log.py shows that the same check finds the password without the cap.
 
 A router under the default RUST_LOG (warn) writes one WARNING per refusal, naming the
-identity, the key and the cause: a wrong password, an unknown user, a denied put
+identity, the key and the cause: a wrong password (whose client's error names the
+likely causes), an unknown user, a denied put
 (200 of them: one line, all counted), a stolen password with another host's
 certificate, a subscriber on a key the identity has no right to; not the routine
 permission blocks of keys a session declares; its counters answer a query on
@@ -33,7 +34,7 @@ import pytest
 
 from common.bus import transport
 from common.bus.procs import Child, pfusion_argv
-from common.bus.transport import free_port, open_session, wait_port
+from common.bus.transport import RouterUnreachable, free_port, open_session, wait_port
 from common.cli import COMMANDS
 from common.deploy.acl import access_control, router_identity, site_identity
 from common.deploy.config import load
@@ -157,7 +158,12 @@ def test_router_audits_denials_and_failed_logins(audited: Secure,
     good = zc(s, "analyst")
     assert good.auth is not None
     bad_auth = dataclasses.replace(good.auth, credentials=str(wrong))
-    assert not connects(dataclasses.replace(good, auth=bad_auth))
+    with pytest.raises(RouterUnreachable) as refused:
+        open_session(dataclasses.replace(good, auth=bad_auth)).close()
+    for cause in (f"wrong password for identity 'analyst' in {wrong}",
+                  "the router's certificate is not signed by", "this host's certificate",
+                  "the router is not running at that address", "'audit login_failed'"):
+        assert cause in str(refused.value), str(refused.value)  # the client names the causes
     assert not connects(dataclasses.replace(good, identity="nobody", auth=bad_auth))
     with open_session(good) as session:
         put_all(zc(s, site_identity("rx1")), ["radar/gtracks"] * 200, declared=False)
