@@ -21,10 +21,10 @@ So consecutive denials of one thread on one session, key and direction are group
 one kind alone is a refused message (``denied``); a block that denies every kind on
 ingress for a key on and below which the identity has no right at all (``may_use``: a
 service declares the prefix of its wildcard keys too) is a session using a key it has
-no right to (``denied``); any other
-block is the routine map of what a session may not do with a key it declared
-(``key_denied``, counted, logged at DEBUG only). A declaration refused on a key where
-the identity has some other right is therefore only a ``key_denied``.
+no right to (``denied``); any other block is the routine map of what a session may not
+do with a key it declared (``key_denied``, counted, logged at DEBUG only). A
+declaration refused on a key where the identity has some other right is therefore
+only a ``key_denied``.
 
 Pure: lines and the time in, events and counters out (common.bus.log_tap does the I/O).
 """
@@ -67,7 +67,7 @@ CAUSES = {"Invalid password": "wrong password", "Invalid user": "unknown user",
 
 @dataclass(frozen=True)
 class Event:
-    """One refusal: ``kind`` (denied, login_failed, tls_refused, no_subject), who
+    """One refusal: ``kind`` (denied, key_denied, login_failed, tls_refused, no_subject), who
     (``user@common-name``, '?' for a part not known), what, why, and the remote address
     when known; ``line`` is the audit line."""
 
