@@ -4,10 +4,12 @@ logs" and "Audit"), on real processes of the secured deployment of test_security
 
 Under RUST_LOG=trace (Zenoh's most verbose log, which prints the whole configuration
 at debug) the fusion router, a site router (which has a password of its own towards
-the fusion router), b1's plotter and elementary tracker, global fusion, the simulator
-and ``pfusion status`` run; every log file, every process's output, and the
-/proc/<pid>/cmdline and /proc/<pid>/environ of each while it runs hold no password of
-the dictionary, while the logs do hold Zenoh's trace lines (the level was in force).
+the fusion router), ``pfusion run`` on site rx1's host (its identity; its children
+b1's plotter and elementary tracker log through it), global fusion, the simulator and
+``pfusion status`` run; every log file, every process's output, and the
+/proc/<pid>/cmdline and /proc/<pid>/environ of each process and its children while
+they run hold no password of the dictionary, while the logs do hold Zenoh's trace lines
+(the level was in force).
 tests/bus/test_rust_log.py shows that the same check finds the password without the cap.
 
 A router under the default RUST_LOG (warn) writes one WARNING per refusal, naming the
@@ -43,6 +45,7 @@ from common.wire import protocol
 from services.router.main import may_use
 from tests.integration.test_security import (
     SCENARIO,
+    SITE_HOST,
     Secure,
     connects,
     deployment_files,
@@ -74,10 +77,35 @@ def trace_env() -> Iterator[None]:
             os.environ["RUST_LOG"] = before
 
 
-def proc_text(pid: int) -> str:
-    """A running process's command line and initial environment."""
-    return "".join(Path(f"/proc/{pid}/{f}").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-                   for f in ("cmdline", "environ"))
+def family(pids: list[int]) -> set[int]:
+    """``pids`` and all their descendants that run now."""
+    parents: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    found, todo = set(), list(pids)
+    while todo:
+        pid = todo.pop()
+        if pid not in found:
+            found.add(pid)
+            todo += parents.get(pid, [])
+    return found
+
+
+def proc_texts(pids: set[int]) -> dict[str, str]:
+    """The command line and initial environment of each process of ``pids`` that still runs."""
+    out = {}
+    for pid in pids:
+        try:
+            out[f"/proc/{pid}"] = "".join(
+                Path(f"/proc/{pid}/{f}").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+                for f in ("cmdline", "environ"))
+        except OSError:  # it ended meanwhile
+            pass
+    return out
 
 
 def test_no_password_in_any_output_under_rust_log_trace(tmp_path: Path, trace_env: None) -> None:
@@ -97,18 +125,27 @@ def test_no_password_in_any_output_under_rust_log_trace(tmp_path: Path, trace_en
         wait_port(site_port, timeout=60.0)
         specs = [s for s in plan(load(fusion), str(fusion), COMMANDS)
                  if s.name in ("channel-plotter/b1", "elementary-tracker/b1", "global-fusion")]
-        for s in specs:
-            children.append(Child(s.name, *s.argv, "--connect", site_ep if "b1" in s.name else ep,
-                                  log=logs / f"{s.name.replace('/', '-')}.log"))
+        # site rx1's host: pfusion run (its own identity) starts b1's plotter and tracker
+        site_host = tmp_path / "site-host"
+        site_host.mkdir()
+        (site_host / "site.toml").write_text(SITE_HOST.format(d=tmp_path))
+        mine = ("site-rx1", "channel-plotter-b1", "elementary-tracker-b1")
+        (site_host / "credentials.txt").write_text("".join(
+            f"{line}\n" for line in (tmp_path / "credentials.txt").read_text().splitlines()
+            if line.partition(":")[0] in mine))
+        (site_host / "credentials.txt").chmod(0o600)
+        children.append(Child("run-rx1", "run", "--config", str(site_host / "site.toml"),
+                              "--identity", "site-rx1", "--connect", site_ep, log=logs / "run-rx1.log"))
+        children.append(Child("global-fusion", "global-fusion", "--config", str(fusion),
+                              "--connect", ep, log=logs / "global-fusion.log"))
         sim = Child("simulate", "simulate", "--config", str(fusion), "--scenario", str(SCENARIO),
                     "--scans", str(SCANS), "--connect", ep, "--wait-timeout", "120",
                     *(a for s in specs for a in ("--wait-alive", s.alive)), log=logs / "simulate.log")
         children.append(sim)
         time.sleep(1.0)
-        for c in children:  # every process while it runs (the simulator waits for the others)
-            if c.alive():
-                seen[c.name] = proc_text(c.proc.pid)
+        seen |= proc_texts(family([c.proc.pid for c in children]))  # the simulator while it waits
         assert sim.wait(240) == 0, (logs / "simulate.log").read_text()[-2000:]
+        seen |= proc_texts(family([c.proc.pid for c in children]))  # run's children are alive now
         status = subprocess.run(pfusion_argv("status", "--config", str(fusion), "--connect", ep),
                                 capture_output=True, text=True, timeout=120)
         seen["status"] = status.stdout + status.stderr
@@ -117,13 +154,14 @@ def test_no_password_in_any_output_under_rust_log_trace(tmp_path: Path, trace_en
             c.stop()
     for f in logs.glob("*.log"):
         seen[f.name] = f.read_text(errors="replace")
-    assert len([n for n in seen if n.endswith(".log")]) == 6
-    assert {c.name for c in children} <= set(seen), sorted(seen)
+    assert len([n for n in seen if n.endswith(".log")]) == 5
+    assert len([n for n in seen if n.startswith("/proc/")]) >= 8, sorted(seen)  # run's children too
+    assert "[channel-plotter/b1]" in seen["run-rx1.log"]  # its children log through it
     seen = {name: re.sub(r"\x1b\[[0-9;]*m", "", text) for name, text in seen.items()}
     for name, text in seen.items():
         leaked = [pw for pw in passwords(tmp_path) if pw in text]
         assert not leaked, f"a password in {name}"
-    for name in ("router.log", "router-rx1.log", "global-fusion.log", "simulate.log"):
+    for name in ("router.log", "router-rx1.log", "global-fusion.log", "simulate.log", "run-rx1.log"):
         assert " TRACE " in seen[name], f"RUST_LOG=trace was not in force in {name}"
     assert " TRACE " in seen["status"]
 
