@@ -22,6 +22,8 @@ import msgpack
 import zenoh
 
 from common.bus.certs import check_validity
+from common.bus.refusal import refusal_causes
+from common.bus.rust_log import init_zenoh_log
 from common.core.sequence import SequenceCheck
 from common.deploy.config import ConfigError, ZenohConfig
 
@@ -45,8 +47,9 @@ def zenoh_config(
 ) -> zenoh.Config:
     """A Zenoh config: multicast scouting off, explicit endpoints, the lease of the mode;
     the TLS and authentication of ``security`` (its [zenoh.tls], [zenoh.auth] and identity).
-    With RUST_LOG set (e.g. ``RUST_LOG=warn``), Zenoh's own log goes to stdout."""
-    zenoh.try_init_log_from_env()
+    With RUST_LOG set (e.g. ``RUST_LOG=warn``), Zenoh's own log goes to stdout, never
+    with a password (common.bus.rust_log)."""
+    init_zenoh_log()
     c = zenoh.Config()
     c.insert_json5("mode", json.dumps(mode))
     c.insert_json5("scouting/multicast/enabled", "false")
@@ -129,8 +132,8 @@ def password(credentials: str, identity: str) -> str:
 
 
 class RouterUnreachable(zenoh.ZError):
-    """A client session found no router at its connect endpoints; the message names them
-    and the fix (``pfusion`` prints it as one line and exits with code 2)."""
+    """A client session found no router at its connect endpoints; the message names them,
+    the likely causes and the fix (``pfusion`` prints it as one line and exits with code 2)."""
 
 
 def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
@@ -143,8 +146,7 @@ def open_session(zc: ZenohConfig, mode: str = "client") -> zenoh.Session:
             raise
         why = f"nothing answered within {CONNECT_TIMEOUT_S} s" if "Unable to connect" in str(e) else str(e)
         if zc.auth is not None or zc.tls is not None:
-            why += (f"; or it refused identity '{zc.identity}' or its certificate: check "
-                    "[zenoh.auth] and [zenoh.tls]")
+            why += f"; {refusal_causes(zc)}"
         raise RouterUnreachable(
             f"no Zenoh router reachable at {', '.join(zc.connect)} ({why}): start one with "
             f"'pfusion router --listen {zc.connect[0]}', or pass --connect ENDPOINT") from None
@@ -225,8 +227,9 @@ def wait_port(port: int, timeout: float = 10.0) -> None:
 
 
 def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: float,
-               stop: threading.Event | None = None) -> None:
-    """Block until every root/alive/<name> liveliness token is present (or ``stop``)."""
+               stop: threading.Event | None = None, hint: str = "") -> None:
+    """Block until every root/alive/<name> liveliness token is present (or ``stop``);
+    ``hint`` ends the TimeoutError's message (common.bus.refusal.silence_causes)."""
     stop = stop or threading.Event()
     deadline = time.monotonic() + timeout
     missing = set(names)
@@ -235,7 +238,8 @@ def wait_alive(session: zenoh.Session, root: str, names: list[str], timeout: flo
             if any(r.ok for r in session.liveliness().get(f"{root}/alive/{name}", timeout=1.0)):
                 missing.discard(name)
         if missing and time.monotonic() > deadline:
-            raise TimeoutError(f"services not alive after {timeout} s: {sorted(missing)}")
+            raise TimeoutError(f"services not alive after {timeout} s: {sorted(missing)}"
+                               + (f" ({hint})" if hint else ""))
         if missing:
             stop.wait(0.1)
     stop.wait(0.3)  # let subscriber declarations reach every router on the path

@@ -20,6 +20,7 @@ import zenoh
 
 from common.bus import control
 from common.bus.recording import RecordingError, RecordReader
+from common.bus.refusal import silence_causes
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.wire import protocol
@@ -91,7 +92,8 @@ def main(args: argparse.Namespace) -> int:
             log.error("%s: %s", path, e)
             return 2
         with open_session(cfg.zenoh) as session:
-            wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
+            wait_alive(session, root, args.wait_alive, args.wait_timeout, stop,
+                       silence_causes(cfg.zenoh) if cfg.zenoh.auth is not None else "")
             refused = clear_ahead(session, root, t_first, args.reset, args.wait_timeout)
             if refused:
                 print(f"pfusion replay: {refused}", file=sys.stderr)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import zenoh
 
+from common.bus.refusal import silence_causes
 from common.bus.transport import Publisher, linger, open_session, stop_on_signals, wait_alive
 from common.cli import add_common, load_config
 from common.sim.simulator import load_scenario
@@ -83,7 +84,8 @@ def main(args: argparse.Namespace) -> int:
         # the first scan's publishers are declared before waiting for the subscribers, so
         # the routing of every key is settled before the first sample
         pubs = {suffix: Publisher(session, f"{root}/{suffix}") for suffix, _ in (first or (0, []))[1]}
-        wait_alive(session, root, args.wait_alive, args.wait_timeout, stop)
+        wait_alive(session, root, args.wait_alive, args.wait_timeout, stop,
+                   silence_causes(cfg.zenoh) if cfg.zenoh.auth is not None else "")
         published = scans = 0
         t_first = t = 0.0
         wall0 = time.monotonic()

@@ -32,9 +32,11 @@ from aiohttp import web
 from common.bus.liveliness import alive, take
 from common.bus.transport import Envelope, Inbox, open_session
 from common.cli import add_common, load_config
+from common.deploy.config import ConfigError
 from common.wire import protocol
 from common.wire.geojson import collection, site_features, track_features, view_shapes
 from common.wire.view_model import ViewModel
+from services.view.access import Access, is_loopback, read_token
 from services.view.server import STALE_S, Hub, app
 
 ALIVE_PERIOD_S = 1.0
@@ -51,7 +53,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stale", type=float, default=STALE_S, metavar="S",
                    help="the page says stale after S s without a data message (default %(default)s)")
     p.add_argument("--host", default="127.0.0.1",
-                   help="address to listen on (default loopback only; 0.0.0.0 for every interface)")
+                   help="address to listen on (default loopback only; 0.0.0.0 for every interface, "
+                        "which needs --token-file)")
+    p.add_argument("--token-file", metavar="FILE",
+                   help="a file (mode 600) holding the token every request must carry; required "
+                        "off loopback (docs/security.md, the view)")
+    p.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
+                   help="another origin allowed to open the WebSocket, e.g. "
+                        "https://view.example (repeatable; the view's own are always allowed)")
 
 
 class Feed:
@@ -156,7 +165,8 @@ def geojson_route(model: ViewModel) -> Any:
     return route
 
 
-async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewModel, root: str) -> int:
+async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewModel, root: str,
+                token: str | None = None) -> int:
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -164,6 +174,8 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
     hub = Hub(model, stale_s=args.stale)
     feed = Feed(session, hub, root, loop)  # subscribed before the page can be reached
     application = app(hub)
+    access = Access(token, args.allow_origin, hub.counters)
+    application.middlewares.append(access.middleware())  # first: it guards every route
     application.middlewares.append(geojson_route(model))
     runner = web.AppRunner(application, access_log=None, shutdown_timeout=2.0)
     await runner.setup()
@@ -177,7 +189,9 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
               "pass --port with a free port", file=sys.stderr)
         return 2
     port = runner.addresses[0][1]
-    print(f"view: http://{args.host}:{port}/", flush=True)
+    access.listening(args.host, port)
+    print(f"view: http://{args.host}:{port}/" + (f" (open /?token=<the token in {args.token_file}> "
+                                                 "once)" if token else ""), flush=True)
     tasks = [asyncio.create_task(feed.pump()), asyncio.create_task(feed.watch_alive())]
     try:
         await stop.wait()
@@ -193,5 +207,9 @@ async def serve(args: argparse.Namespace, session: zenoh.Session, model: ViewMod
 
 def main(args: argparse.Namespace) -> int:
     cfg = load_config(args)
+    token = read_token(args.token_file) if args.token_file else None
+    if token is None and not is_loopback(args.host):
+        raise ConfigError("--token-file", f"a view listening on {args.host} (not loopback) needs "
+                                          "a token: --token-file FILE (mode 600, docs/security.md)")
     with open_session(cfg.zenoh) as session:
-        return asyncio.run(serve(args, session, ViewModel(cfg), cfg.zenoh.root))
+        return asyncio.run(serve(args, session, ViewModel(cfg), cfg.zenoh.root, token))
