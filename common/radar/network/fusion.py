@@ -11,8 +11,9 @@ time t (no common scan time):
   3. a member's measurement is gated (chi-square, S = H P~ H' + R, H the rows of 001
      [47]'s Jacobian) on its own track; outside the gate it counts a miss (released
      after member_misses); the range innovations of the members of confirmed tracks
-     in the gate update the base's clock offset ([C1]-[C2]); an unassigned confirmed
-     elementary track is gated on every track without a member of this base and
+     in the gate update the base's clock offset ([C1]-[C2]); a member whose equivalent
+     measurement failed its test (its elementary track changed aircraft) counts a miss
+     too; an unassigned confirmed elementary track is gated on every track without a member of this base and
      assigned by global nearest neighbour;
   4. one batched EKF update (001 [55]-[62], common.core.kalman) of the tracks hit;
   5. bookkeeping: a cycle with updates from >= 3 bases over >= 2 receivers counts one
@@ -148,6 +149,8 @@ class NetworkFusion:
         self.clocks.update(b, t, z[mem[use], 1], z[mem[use], 0] - h[trk[use], 0],
                            A[trk[use], 0, 0] + eq.R[mem[use], 0, 0])
         T.count_misses(b, tr.id[mem[~hit]])
+        torn = np.flatnonzero(~eq.ok & tr.updated & ~tr.ambiguous)
+        T.count_misses(b, tr.id[torn[T.is_member(b, tr.id[torn])]])
         up_t, up_r = list(trk[hit]), list(mem[hit])
         cand = np.flatnonzero(~T.has_base(b))
         if free.size and cand.size:
