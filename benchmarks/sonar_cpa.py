@@ -111,7 +111,8 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
             if feedback:  # the solutions back to the tracker for its later cycles (range_noise)
                 for tid, out in report.solutions:
                     usable = out.converged and out.range_observable
-                    trk.tma_hint(tid, TmaHint(out.t, out.x, out.y, out.vx, out.vy, usable))
+                    trk.tma_hint(tid, TmaHint(out.t, out.x, out.y, out.vx, out.vy, usable,
+                                              np.asarray(out.P, float), out.converged))
     t, xy, x = np.asarray(times), np.asarray(own), np.asarray(truth)
     t_cpa = float(t[np.argmin(np.hypot(*(x[:, :2] - xy).T))])
     sol = dict(report.solutions).get(first) if report is not None and first is not None else None

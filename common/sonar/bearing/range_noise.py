@@ -24,11 +24,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, usable_covariance
+
 
 @dataclass(frozen=True)
 class TmaHint:
     """A contact's TMA solution as the tracker uses it: time, position, velocity (ENU m, m/s),
-    and whether its range is usable (the solve converged and the range is observable)."""
+    whether its range is usable (the solve converged and the range is observable), its
+    covariance P (4, 4) of [x, y, vx, vy] and whether the solve converged (the
+    bearing prediction of common.sonar.bearing.tma_prediction needs P and convergence)."""
 
     t: float
     x: float
@@ -36,6 +40,8 @@ class TmaHint:
     vx: float
     vy: float
     usable: bool = True
+    P: np.ndarray | None = None
+    converged: bool = False
 
 
 class RangeNoise:
@@ -46,32 +52,83 @@ class RangeNoise:
         self.r_floor = r_floor
         self.hints: dict[int, TmaHint] = {}
         self.own: tuple[float, float, float] | None = None
+        self.prev: tuple[float, float, float] | None = None
 
     def set(self, track: int, hint: TmaHint) -> None:
         """The latest TMA solution of a track number."""
         self.hints[track] = hint
 
-    def q_theta(self, ids: np.ndarray, q: float, t: float, own_x: float, own_y: float) -> np.ndarray:
-        """Bearing noise power (N,) of the tracks ``ids`` for the cycle ending at t: q, raised
-        by a^2 T for those with a fresh hint. Call once per cycle (it keeps the own position)."""
+    def cycle(self, t: float, own_x: float, own_y: float) -> None:
+        """The own position of the cycle ending at t (call once per cycle, first)."""
+        self.prev, self.own = self.own, (t, own_x, own_y)
+
+    def _fresh(self, k: int, t: float) -> TmaHint | None:
+        h = self.hints.get(k)
+        return h if h is not None and 0.0 <= t - h.t <= self.max_age else None
+
+    def predictions(self, ids: np.ndarray, theta0: np.ndarray, var0: np.ndarray, theta1: np.ndarray,
+                    var1: np.ndarray, q_block: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The TMA-predicted [theta, theta'] (K, 2) and covariance J P J' + q_block (K, 2, 2)
+        of the tracks ``ids`` (positions (K,) into ids) whose fresh, converged hint agrees
+        with their estimate theta0 (var0) of the previous cycle
+        (common.sonar.bearing.tma_prediction); q_block (2, 2) or (N, 2, 2)."""
+        pos: list[int] = []
+        means: list[np.ndarray] = []
+        covs: list[np.ndarray] = []
+        if self.prev is None or self.own is None or not self.hints or self.own[0] <= self.prev[0]:
+            return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
+        (t0, ox0, oy0), (t, ox, oy) = self.prev, self.own
+        o0, o1 = np.array([ox0, oy0]), np.array([ox, oy])
+        u = (o1 - o0) / (t - t0)
+        qb = np.broadcast_to(q_block, (len(ids), 2, 2))
+        for i, k in enumerate(np.asarray(ids).tolist()):
+            h = self._fresh(int(k), t)
+            if h is None or not h.converged or h.P is None:
+                continue
+            p, v, P = np.array([h.x, h.y]), np.array([h.vx, h.vy]), np.asarray(h.P, float).reshape(4, 4)
+            if 0.5 * self._acceleration(h, t0, o0, t, o1) * (t - t0) ** 2 <= np.sqrt(var0[i]):
+                continue  # the model's unmodelled bearing change is within its sigma: it predicts
+            m0, c0 = bearing_and_rate(p, v, P, h.t, t0, o0, u)
+            m1, c1 = bearing_and_rate(p, v, P, h.t, t, o1, u)
+            if not (usable_covariance(c0) and usable_covariance(c1)):
+                continue
+            if not consistent(float(m0[0]), float(c0[0, 0]), float(theta0[i]), float(var0[i])):
+                continue
+            if not consistent(float(m1[0]), float(c1[0, 0]), float(theta1[i]), float(var1[i])):
+                continue
+            pos.append(i)
+            means.append(m1)
+            covs.append(c1 + qb[i])
+        if not pos:
+            return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
+        return np.asarray(pos, np.intp), np.asarray(means), np.asarray(covs)
+
+    def q_theta(self, ids: np.ndarray, q: float) -> np.ndarray:
+        """Bearing noise power (N,) of the tracks ``ids`` for the cycle of :meth:`cycle`: q,
+        raised by a^2 T for those with a fresh usable hint."""
         out = np.full(len(ids), q)
-        prev, self.own = self.own, (t, own_x, own_y)
-        if prev is None or not self.hints or t <= prev[0]:
+        prev = self.prev
+        if prev is None or self.own is None or not self.hints or self.own[0] <= prev[0]:
             return out
+        t, own_x, own_y = self.own
         t0, ox0, oy0 = prev
         T = t - t0
         for i, k in enumerate(np.asarray(ids).tolist()):
-            h = self.hints.get(int(k))
-            if h is None or not h.usable or not 0.0 <= t - h.t <= self.max_age:
-                continue
-            d0 = np.array([h.x + h.vx * (t0 - h.t) - ox0, h.y + h.vy * (t0 - h.t) - oy0])
-            d1 = np.array([h.x + h.vx * (t - h.t) - own_x, h.y + h.vy * (t - h.t) - own_y])
-            v = (d1 - d0) / T
-            s = float(np.clip(-(d0 @ v) / max(float(v @ v), 1e-12), 0.0, T))  # closest time in the cycle
-            r = max(float(np.hypot(*(d0 + v * s))), self.r_floor)
-            a = float(v @ v) / r**2  # |theta''| <= v^2 / r^2
-            out[i] = q + a * a * T
+            h = self._fresh(int(k), t)
+            if h is not None and h.usable:
+                a = self._acceleration(h, t0, np.array([ox0, oy0]), t, np.array([own_x, own_y]))
+                out[i] = q + a * a * T
         return out
+
+    def _acceleration(self, h: TmaHint, t0: float, o0: np.ndarray, t: float, o1: np.ndarray) -> float:
+        """a = v^2 / r_min^2 of the hint over the cycle t0 -> t (own ship straight between o0, o1)."""
+        T = t - t0
+        d0 = np.array([h.x + h.vx * (t0 - h.t), h.y + h.vy * (t0 - h.t)]) - o0
+        d1 = np.array([h.x + h.vx * (t - h.t), h.y + h.vy * (t - h.t)]) - o1
+        v = (d1 - d0) / T
+        s = float(np.clip(-(d0 @ v) / max(float(v @ v), 1e-12), 0.0, T))  # closest time in the cycle
+        r = max(float(np.hypot(*(d0 + v * s))), self.r_floor)
+        return float(v @ v) / r**2  # |theta''| <= v^2 / r^2
 
     def forget(self, keep: np.ndarray) -> None:
         """Drop the hints of track numbers not in ``keep``."""

@@ -78,6 +78,7 @@ from common.sonar.bearing.model import detection_probability, measurement_matrix
 from common.sonar.bearing.multiline import NEW
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
+from common.sonar.bearing.tma_prediction import with_bearing
 from common.sonar.bearing.tracker import Cycle
 from common.sonar.mht.hypotheses import (
     LN_2PI,
@@ -156,12 +157,16 @@ class MhtTracker:
             self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
         self.hmeas = self.hmeas[src]
         Qm = np.stack([self.process_noise(T, q) for q in self.q_models])[self.hm]
-        q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta, t, own_x, own_y)[self.ht]  # issue 31
+        self.range_noise.cycle(t, own_x, own_y)  # issue 31: the contact's TMA solution
+        q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta)[self.ht]
         raised = (self.hm == len(self.q_models) - 1) & (q_man > self.params.q_theta)
         if raised.any():
             Qm[raised] = self.process_noise(np.full(int(raised.sum()), T), q_man[raised])
         xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
+        k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
+            tr.uid[self.ht], self.hx[:, 0], self.hP[:, 0, 0], xp[:, 0], Pp[:, 0, 0], Qm[:, :2, :2])
+        xp, Pp = with_bearing(xp, Pp, k, m2, C2)
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
         nT = tr.size

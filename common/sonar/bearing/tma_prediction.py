@@ -1,0 +1,80 @@
+"""Bearing and bearing rate predicted from a contact's TMA solution (issue 31, contacts that
+pass close; docs/equations.md "TMA-predicted bearing"; docs/decisions/026).
+
+Choice (stated; 000 predicts with its straight-line-segment model only): near a closest
+approach the bearing of a straight relative track, theta(t) = atan2(d_x, d_y) with
+d(t) = p + v (t - t_h) - o(t), moves tens of degrees per sample while 000's model
+extrapolates its last rate. A track given its contact's converged TMA solution (p, v, P of
+002 at t_h) predicts [theta, theta'] at t from it:
+
+  theta = atan2(d_x, d_y),  theta' = (d_y w_x - d_x w_y) / r^2,  w = v - u (u: own velocity),
+  C = J P J' + Q_theta(T),  J = d[theta, theta'] / d[p, v] (first order),
+
+Q_theta the bearing block of 000's Q over the cycle (the manoeuvre power). Both are
+invariant along d -> k d, w -> k w, the direction bearings alone leave open before an
+own-ship manoeuvre, so J P J' stays finite when the range is unobservable: the bearing
+prediction needs the solution's convergence, not its range.
+
+Guards (a stale or wrong solution cannot capture a track): the solution is used for
+``max_age`` seconds after its time and only by the track number it was solved for (a
+deleted number drops it); it must agree with the track's own estimate at the previous
+cycle, d^2 = (theta_h - theta)^2 / (C_h + P_theta) <= ``gate`` (else the model predicts);
+it replaces the mean and covariance of the bearing block only, and the detection must
+still pass the 000 gate with that honest covariance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from common.core.angles import wrap_2pi, wrap_pi
+from common.core.gating import quadratic_form
+
+GATE = 9.0  # chi-square, 1 degree of freedom, 99.7 %
+MAX_SIGMA = float(np.pi / 4.0)  # rad: a wider bearing prediction is no prediction
+
+
+def bearing_and_rate(p: np.ndarray, v: np.ndarray, P: np.ndarray, t_h: float, t: float,
+                     own: np.ndarray, own_v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """[theta, theta'] at t of the solution (p, v, P at t_h) seen from own (velocity own_v),
+    and its first-order covariance J P J' (module docstring)."""
+    tau = t - t_h
+    d = p + v * tau - own
+    w = v - own_v
+    r2 = max(float(d @ d), 1e-6)
+    theta = float(np.arctan2(d[0], d[1]))
+    rate = float(d[1] * w[0] - d[0] * w[1]) / r2
+    g_th = np.array([d[1], -d[0]]) / r2  # d theta / d d
+    g_rd = np.array([-w[1] - 2.0 * d[0] * rate, w[0] - 2.0 * d[1] * rate]) / r2  # d theta' / d d
+    g_rw = np.array([d[1], -d[0]]) / r2  # d theta' / d w
+    J = np.array([np.r_[g_th, tau * g_th], np.r_[g_rd, tau * g_rd + g_rw]])
+    return np.array([theta, rate]), J @ P @ J.T
+
+
+def usable_covariance(C: np.ndarray, max_sigma: float = MAX_SIGMA) -> bool:
+    """C (2, 2) finite, positive definite, and its bearing sigma at most max_sigma (rad): a
+    published P that is near singular (an unobservable range) can lose J P J' to rounding."""
+    if not np.all(np.isfinite(C)) or C[0, 0] > max_sigma**2:
+        return False
+    return bool(np.all(np.linalg.eigvalsh(0.5 * (C + C.T)) > 0.0))
+
+
+def consistent(h_theta: float, h_var: float, theta: float, var: float, gate: float = GATE) -> bool:
+    """The solution's bearing agrees with the track's estimate: d^2 <= gate."""
+    y = np.array([wrap_pi(np.asarray(h_theta - theta))])
+    return bool(quadratic_form(y, np.array([[h_var + var]])) <= gate)
+
+
+def with_bearing(x: np.ndarray, P: np.ndarray, k: np.ndarray, m2: np.ndarray, C2: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """x (N, n), P with rows k's bearing block [theta, theta'] set to m2 (K, 2), C2 (K, 2, 2),
+    uncorrelated with the rest of the state."""
+    if k.size == 0:
+        return x, P
+    x, P = x.copy(), P.copy()
+    x[k, :2] = m2
+    x[k, 0] = wrap_2pi(m2[:, 0])
+    P[k, :2, 2:] = 0.0
+    P[k, 2:, :2] = 0.0
+    P[k, :2, :2] = C2
+    return x, P
