@@ -167,6 +167,7 @@ class MhtTracker:
         k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
             tr.uid[self.ht], self.hx[:, 0], self.hP[:, 0, 0], xp[:, 0], Pp[:, 0, 0], Qm[:, :2, :2])
         xp, Pp = with_bearing(xp, Pp, k, m2, C2)
+        by_tma = self.range_noise.solved(tr.uid)  # not deleted for its bearing sigma
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
         nT = tr.size
@@ -225,7 +226,7 @@ class MhtTracker:
         drop |= self._merge_tracks()  # 000 track merge
         _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
         drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)
-        drop |= np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)
+        drop |= (np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)) & ~np.r_[by_tma, np.zeros(drop.size - by_tma.size, bool)]
         for u in tr.uid[drop & (tr.ever_confirmed)]:
             self.retro.retire(int(u))
         live_h = ~drop[self.ht]
