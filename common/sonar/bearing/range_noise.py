@@ -24,15 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, usable_covariance
+from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, curvature, usable_covariance
 
-
-K_SIGMA = 0.5  # the switch to the TMA prediction bounds the range by r + 0.5 sigma_R
-
-
-def quadratic_form_sq(g: np.ndarray, P: np.ndarray) -> float:
-    """g P g' (a variance through a gradient; not y' S^-1 y)."""
-    return float(g @ P @ g)
+K_SIGMA = 0.0
 
 
 @dataclass(frozen=True)
@@ -100,10 +94,12 @@ class RangeNoise:
             if h is None or not h.converged or h.P is None:
                 continue
             p, v, P = np.array([h.x, h.y]), np.array([h.vx, h.vy]), np.asarray(h.P, float).reshape(4, 4)
-            if 0.5 * self._acceleration(h, t0, o0, t, o1, K_SIGMA) * (t - t0) ** 2 <= np.sqrt(var0[i]):
+            m0, J0 = bearing_and_rate(p, v, h.t, t0, o0, u)
+            m1, J1 = bearing_and_rate(p, v, h.t, t, o1, u)
+            c, var_c = curvature(m0, J0, m1, J1, t - t0, P)
+            if abs(c) - K_SIGMA * np.sqrt(max(var_c, 0.0)) <= np.sqrt(var0[i]):
                 continue  # the model's unmodelled bearing change is within its sigma: it predicts
-            m0, c0 = bearing_and_rate(p, v, P, h.t, t0, o0, u)
-            m1, c1 = bearing_and_rate(p, v, P, h.t, t, o1, u)
+            c0, c1 = J0 @ P @ J0.T, J1 @ P @ J1.T
             if not (usable_covariance(c0) and usable_covariance(c1)):
                 continue
             if not consistent(float(m0[0]), float(c0[0, 0]), float(theta0[i]), float(var0[i])):
@@ -134,23 +130,14 @@ class RangeNoise:
                 out[i] = q + a * a * T
         return out
 
-    def _acceleration(self, h: TmaHint, t0: float, o0: np.ndarray, t: float, o1: np.ndarray,
-                      k_sigma: float = 0.0) -> float:
-        """a = v^2 / r_min^2 of the hint over the cycle t0 -> t (own ship straight between o0,
-        o1); with k_sigma > 0 and the hint's P, r_min + k_sigma sigma_R (a range that the
-        solution's uncertainty cannot make larger, so the bound it cannot make smaller)."""
+    def _acceleration(self, h: TmaHint, t0: float, o0: np.ndarray, t: float, o1: np.ndarray) -> float:
+        """a = v^2 / r_min^2 of the hint over the cycle t0 -> t (own ship straight between o0, o1)."""
         T = t - t0
         d0 = np.array([h.x + h.vx * (t0 - h.t), h.y + h.vy * (t0 - h.t)]) - o0
         d1 = np.array([h.x + h.vx * (t - h.t), h.y + h.vy * (t - h.t)]) - o1
         v = (d1 - d0) / T
         s = float(np.clip(-(d0 @ v) / max(float(v @ v), 1e-12), 0.0, T))  # closest time in the cycle
-        d = d0 + v * s
-        r = float(np.hypot(*d))
-        if k_sigma > 0.0 and h.P is not None:
-            tau = t0 + s - h.t
-            g = np.r_[d, tau * d] / max(r, 1e-9)  # dR / d[p, v]
-            r += k_sigma * float(np.sqrt(max(quadratic_form_sq(g, np.asarray(h.P, float).reshape(4, 4)), 0.0)))
-        r = max(r, self.r_floor)
+        r = max(float(np.hypot(*(d0 + v * s))), self.r_floor)
         return float(v @ v) / r**2  # |theta''| <= v^2 / r^2
 
     def forget(self, keep: np.ndarray) -> None:

@@ -34,10 +34,10 @@ GATE = 9.0  # chi-square, 1 degree of freedom, 99.7 %
 MAX_SIGMA = float(np.pi / 4.0)  # rad: a wider bearing prediction is no prediction
 
 
-def bearing_and_rate(p: np.ndarray, v: np.ndarray, P: np.ndarray, t_h: float, t: float,
+def bearing_and_rate(p: np.ndarray, v: np.ndarray, t_h: float, t: float,
                      own: np.ndarray, own_v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """[theta, theta'] at t of the solution (p, v, P at t_h) seen from own (velocity own_v),
-    and its first-order covariance J P J' (module docstring)."""
+    """[theta, theta'] at t of the solution (p, v at t_h) seen from own (velocity own_v),
+    and J (2, 4) = d[theta, theta'] / d[p, v] (module docstring)."""
     tau = t - t_h
     d = p + v * tau - own
     w = v - own_v
@@ -48,7 +48,17 @@ def bearing_and_rate(p: np.ndarray, v: np.ndarray, P: np.ndarray, t_h: float, t:
     g_rd = np.array([-w[1] - 2.0 * d[0] * rate, w[0] - 2.0 * d[1] * rate]) / r2  # d theta' / d d
     g_rw = np.array([d[1], -d[0]]) / r2  # d theta' / d w
     J = np.array([np.r_[g_th, tau * g_th], np.r_[g_rd, tau * g_rd + g_rw]])
-    return np.array([theta, rate]), J @ P @ J.T
+    return np.array([theta, rate]), J
+
+
+def curvature(m0: np.ndarray, J0: np.ndarray, m1: np.ndarray, J1: np.ndarray, T: float,
+              P: np.ndarray) -> tuple[float, float]:
+    """The bearing change the constant-rate model misses over T, c = theta_1 - theta_0 -
+    T theta'_0 of the solution, and its variance g P g', g = J1[0] - J0[0] - T J0[1]
+    (both scale invariant: defined when the range is not observable)."""
+    c = float(wrap_pi(np.asarray(m1[0] - m0[0] - T * m0[1])))
+    g = J1[0] - J0[0] - T * J0[1]
+    return c, float(g @ P @ g)
 
 
 def usable_covariance(C: np.ndarray, max_sigma: float = MAX_SIGMA) -> bool:

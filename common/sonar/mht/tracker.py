@@ -226,7 +226,8 @@ class MhtTracker:
         drop |= self._merge_tracks()  # 000 track merge
         _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
         drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)
-        drop |= (np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)) & ~np.r_[by_tma, np.zeros(drop.size - by_tma.size, bool)]
+        by_tma = np.r_[by_tma, np.zeros(drop.size - by_tma.size, bool)]  # tracks split or opened: none
+        drop |= (np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)) & ~by_tma
         for u in tr.uid[drop & (tr.ever_confirmed)]:
             self.retro.retire(int(u))
         live_h = ~drop[self.ht]
