@@ -27,6 +27,7 @@ import numpy as np
 from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, curvature, usable_covariance
 
 K_SIGMA = 0.0
+K_SIGMA_UNOBSERVABLE = 0.0
 
 
 @dataclass(frozen=True)
@@ -74,8 +75,8 @@ class RangeNoise:
         return np.array([(h := self._fresh(int(k), t)) is not None and h.converged
                          for k in np.asarray(ids).tolist()], dtype=bool)
 
-    def predictions(self, ids: np.ndarray, theta0: np.ndarray, var0: np.ndarray, theta1: np.ndarray,
-                    var1: np.ndarray, q_block: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def predictions(self, ids: np.ndarray, x0: np.ndarray, P0: np.ndarray, x1: np.ndarray, P1: np.ndarray,
+                    q_block: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The TMA-predicted [theta, theta'] (K, 2) and covariance J P J' + q_block (K, 2, 2)
         of the tracks ``ids`` (positions (K,) into ids) whose fresh, converged hint agrees
         with their estimate theta0 (var0) of the previous cycle
@@ -97,14 +98,15 @@ class RangeNoise:
             m0, J0 = bearing_and_rate(p, v, h.t, t0, o0, u)
             m1, J1 = bearing_and_rate(p, v, h.t, t, o1, u)
             c, var_c = curvature(m0, J0, m1, J1, t - t0, P)
-            if abs(c) - K_SIGMA * np.sqrt(max(var_c, 0.0)) <= np.sqrt(var0[i]):
+            k_sig = K_SIGMA if h.usable else K_SIGMA_UNOBSERVABLE
+            if abs(c) - k_sig * np.sqrt(max(var_c, 0.0)) <= np.sqrt(P0[i, 0, 0]):
                 continue  # the model's unmodelled bearing change is within its sigma: it predicts
             c0, c1 = J0 @ P @ J0.T, J1 @ P @ J1.T
             if not (usable_covariance(c0) and usable_covariance(c1)):
                 continue
-            if not consistent(float(m0[0]), float(c0[0, 0]), float(theta0[i]), float(var0[i])):
+            if not consistent(m0, c0, x0[i], P0[i]):  # the track's [theta, theta'] of the last cycle
                 continue
-            if not consistent(float(m1[0]), float(c1[0, 0]), float(theta1[i]), float(var1[i])):
+            if not consistent(m1[:1], c1[:1, :1], x1[i, :1], P1[i, :1, :1]):  # its model prediction
                 continue
             pos.append(i)
             means.append(m1)

@@ -30,7 +30,7 @@ import numpy as np
 from common.core.angles import wrap_2pi, wrap_pi
 from common.core.gating import quadratic_form
 
-GATE = 9.0  # chi-square, 1 degree of freedom, 99.7 %
+GATES = (9.0, 11.8)  # chi-square 99.7 %, 1 and 2 degrees of freedom
 MAX_SIGMA = float(np.pi / 4.0)  # rad: a wider bearing prediction is no prediction
 
 
@@ -69,10 +69,12 @@ def usable_covariance(C: np.ndarray, max_sigma: float = MAX_SIGMA) -> bool:
     return bool(np.all(np.linalg.eigvalsh(0.5 * (C + C.T)) > 0.0))
 
 
-def consistent(h_theta: float, h_var: float, theta: float, var: float, gate: float = GATE) -> bool:
-    """The solution's bearing agrees with the track's estimate: d^2 <= gate."""
-    y = np.array([wrap_pi(np.asarray(h_theta - theta))])
-    return bool(quadratic_form(y, np.array([[h_var + var]])) <= gate)
+def consistent(m: np.ndarray, C: np.ndarray, x: np.ndarray, P: np.ndarray) -> bool:
+    """The solution's [theta(, theta')] m (cov C) agrees with the track's x (cov P):
+    d^2 = y' (C + P)^-1 y <= the 99.7 % chi-square quantile of its dimension."""
+    y = np.array(m - x, dtype=float)
+    y[0] = wrap_pi(y[0])
+    return bool(quadratic_form(y, C + P) <= GATES[y.size - 1])
 
 
 def with_bearing(x: np.ndarray, P: np.ndarray, k: np.ndarray, m2: np.ndarray, C2: np.ndarray

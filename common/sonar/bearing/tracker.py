@@ -161,7 +161,7 @@ class BearingTracker:
         T = t - tab.t_last[idx]
         self.range_noise.cycle(t, own_x, own_y)  # issue 31: the contact's TMA solution
         q_man = self.range_noise.q_theta(tab.id[idx], p.q_theta)
-        x0, v0 = x[:, 0].copy(), P[:, 0, 0].copy()
+        x0, P0 = x[:, :2].copy(), P[:, :2, :2].copy()
         if idx.size and self.imm is not None:  # 004 memory mode: quiet Q in both models
             memory = tab.ambiguous[idx] & (self.crossing is not None and self.crossing.memory)
             c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T),
@@ -170,7 +170,7 @@ class BearingTracker:
             x, P = predict(x, P, self._F(T), self._Q(T, q_man))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         if idx.size:  # the bearing block from the TMA solution (tma_prediction)
-            k, m2, C2 = self.range_noise.predictions(tab.id[idx], x0, v0, x[:, 0], P[:, 0, 0],
+            k, m2, C2 = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2],
                                                        self._Q(T)[:, :2, :2])
             x, P = with_bearing(x, P, k, m2, C2)
             if k.size and self.imm is not None:

@@ -165,7 +165,7 @@ class MhtTracker:
         xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
         k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
-            tr.uid[self.ht], self.hx[:, 0], self.hP[:, 0, 0], xp[:, 0], Pp[:, 0, 0], Qm[:, :2, :2])
+            tr.uid[self.ht], self.hx[:, :2], self.hP[:, :2, :2], xp[:, :2], Pp[:, :2, :2], Qm[:, :2, :2])
         xp, Pp = with_bearing(xp, Pp, k, m2, C2)
         by_tma = self.range_noise.solved(tr.uid)  # not deleted for its bearing sigma
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
