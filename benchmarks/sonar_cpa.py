@@ -46,8 +46,9 @@ from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
 from common.sonar.tma.manager import BTrack, BTracks, TmaManager, TrackHistory  # noqa: E402
-from common.sonar.trackers import TmaHint, bearing_tracker  # noqa: E402
+from common.sonar.trackers import bearing_tracker  # noqa: E402
 from common.wire.sim_messages import run_scenario  # noqa: E402
+from common.wire.sonar_messages import tma_hints_from, tma_message  # noqa: E402
 
 CASES = ("sonar_cpa_coarse", "sonar_cpa_fine_300m", "sonar_cpa_coarse_1km", "sonar_cpa_fine_1km_turn")
 MODES = ("gnn", "mht")
@@ -108,11 +109,9 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
                     rows = np.column_stack([cols[k] for k in ("t", "brg", "sbrg", "own_x", "own_y")])
                     hist[tid] = TrackHistory(tid, h[0], rows)
             report = mgr.step(b, hist)
-            if feedback:  # the solutions back to the tracker for its later cycles (range_noise)
-                for tid, out in report.solutions:
-                    usable = out.converged and out.range_observable
-                    trk.tma_hint(tid, TmaHint(out.t, out.x, out.y, out.vx, out.vy, usable,
-                                              np.asarray(out.P, float), out.converged))
+            if feedback:  # the solutions back to the tracker for its later cycles, as the service
+                for tid, hint in tma_hints_from(tma_message(report)):
+                    trk.tma_hint(tid, hint)
     t, xy, x = np.asarray(times), np.asarray(own), np.asarray(truth)
     t_cpa = float(t[np.argmin(np.hypot(*(x[:, :2] - xy).T))])
     sol = dict(report.solutions).get(first) if report is not None and first is not None else None

@@ -24,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, curvature, usable_covariance
+from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, curvature, unscented, usable_covariance
 
 K_SIGMA = 0.0
+UNSCENTED = True
 K_SIGMA_UNOBSERVABLE = 0.0
 
 
@@ -102,6 +103,9 @@ class RangeNoise:
             if abs(c) - k_sig * np.sqrt(max(var_c, 0.0)) <= np.sqrt(P0[i, 0, 0]):
                 continue  # the model's unmodelled bearing change is within its sigma: it predicts
             c0, c1 = J0 @ P @ J0.T, J1 @ P @ J1.T
+            ut = unscented(p, v, P, h.t, t, o1, u) if h.usable and UNSCENTED else None
+            if ut is not None:  # the range is known: the nonlinear spread near the approach
+                m1, c1 = ut
             if not (usable_covariance(c0) and usable_covariance(c1)):
                 continue
             if not consistent(m0, c0, x0[i], P0[i]):  # the track's [theta, theta'] of the last cycle

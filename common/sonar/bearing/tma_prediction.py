@@ -51,6 +51,26 @@ def bearing_and_rate(p: np.ndarray, v: np.ndarray, t_h: float, t: float,
     return np.array([theta, rate]), J
 
 
+def unscented(p: np.ndarray, v: np.ndarray, P: np.ndarray, t_h: float, t: float, own: np.ndarray,
+              own_v: np.ndarray, kappa: float = 1.0) -> tuple[np.ndarray, np.ndarray] | None:
+    """[theta, theta'] at t and its covariance by the unscented transform of (p, v; P) (the
+    2n + 1 points of sqrt((n + kappa) P)); None when P is not positive definite."""
+    n = 4
+    try:
+        L = np.linalg.cholesky((n + kappa) * P)
+    except np.linalg.LinAlgError:
+        return None
+    s0 = np.r_[p, v]
+    pts = [s0] + [s0 + L[:, i] for i in range(n)] + [s0 - L[:, i] for i in range(n)]
+    m = np.array([bearing_and_rate(q[:2], q[2:], t_h, t, own, own_v)[0] for q in pts])
+    m[:, 0] = m[0, 0] + wrap_pi(m[:, 0] - m[0, 0])
+    w = np.full(2 * n + 1, 0.5 / (n + kappa))
+    w[0] = kappa / (n + kappa)
+    mean = w @ m
+    e = m - mean
+    return mean, (w[:, None] * e).T @ e
+
+
 def curvature(m0: np.ndarray, J0: np.ndarray, m1: np.ndarray, J1: np.ndarray, T: float,
               P: np.ndarray) -> tuple[float, float]:
     """The bearing change the constant-rate model misses over T, c = theta_1 - theta_0 -
