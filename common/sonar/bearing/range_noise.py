@@ -1,5 +1,8 @@
-"""Bearing process noise matched to a contact's TMA range (issue 31, contacts that pass close;
-docs/equations.md "Range-matched bearing noise").
+"""A bearing tracker's TMA hints (issue 31, contacts that pass close): the latest solution
+of each track number, used two ways, both for later cycles only:
+- the bearing prediction near an approach (common.sonar.bearing.tma_prediction, `predictions`);
+- bearing process noise matched to the contact's TMA range (docs/equations.md
+  "Range-matched bearing noise", `q_theta`), below.
 
 Choice (stated; 000 has one Q for every track): the straight relative track of a target
 at range r with relative velocity v (v_perp across, v_r along the line of sight) has the
@@ -9,9 +12,9 @@ q_theta + a^2 T, a = v^2 / r_min^2, r_min the least range of the solution over t
 (own ship straight between its two positions) and floored at ``r_floor``, a white
 acceleration power matching a held over T seconds.
 
-Guard: the solution widens the prediction's covariance only, never moves its mean, so a
-wrong or stale solution cannot pull the track onto another bearing; it is used for
-``max_age`` seconds after its time, and only by the track number it was solved for.
+Guard of the noise: it widens the model's covariance only, never moves its mean; a hint is
+used for ``max_age`` seconds after its time, and only by the track number it was solved for
+(the prediction's own guards: tma_prediction).
 
 Data flow: the TMA service solves on the tracker's cycles and registers; its solutions
 come back to the tracker as a hint for later cycles only (the tracker never waits for
@@ -20,32 +23,11 @@ them), so the loop is a delayed feedback, not a dependency of a cycle on itself.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from common.sonar.bearing.tma_prediction import bearing_and_rate, consistent, curvature, unscented, usable_covariance
+from common.sonar.bearing.tma_prediction import TmaHint, predict
 
-K_SIGMA = 0.0
-UNSCENTED = True
-K_SIGMA_UNOBSERVABLE = 0.0
-
-
-@dataclass(frozen=True)
-class TmaHint:
-    """A contact's TMA solution as the tracker uses it: time, position, velocity (ENU m, m/s),
-    whether its range is usable (the solve converged and the range is observable), its
-    covariance P (4, 4) of [x, y, vx, vy] and whether the solve converged (the
-    bearing prediction of common.sonar.bearing.tma_prediction needs P and convergence)."""
-
-    t: float
-    x: float
-    y: float
-    vx: float
-    vy: float
-    usable: bool = True
-    P: np.ndarray | None = None
-    converged: bool = False
+__all__ = ["RangeNoise", "TmaHint"]
 
 
 class RangeNoise:
@@ -78,43 +60,23 @@ class RangeNoise:
 
     def predictions(self, ids: np.ndarray, x0: np.ndarray, P0: np.ndarray, x1: np.ndarray, P1: np.ndarray,
                     q_block: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The TMA-predicted [theta, theta'] (K, 2) and covariance J P J' + q_block (K, 2, 2)
-        of the tracks ``ids`` (positions (K,) into ids) whose fresh, converged hint agrees
-        with their estimate theta0 (var0) of the previous cycle
-        (common.sonar.bearing.tma_prediction); q_block (2, 2) or (N, 2, 2)."""
+        """The tracks ``ids`` (N,) predicted from their hints (common.sonar.bearing.tma_prediction):
+        their positions k (K,) in ids, [theta, theta'] (K, 2) and covariances + q_block (K, 2, 2);
+        x0, P0: [theta, theta'] of the previous cycle, x1, P1: the model's prediction."""
         pos: list[int] = []
         means: list[np.ndarray] = []
         covs: list[np.ndarray] = []
-        if self.prev is None or self.own is None or not self.hints or self.own[0] <= self.prev[0]:
-            return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
-        (t0, ox0, oy0), (t, ox, oy) = self.prev, self.own
-        o0, o1 = np.array([ox0, oy0]), np.array([ox, oy])
-        u = (o1 - o0) / (t - t0)
-        qb = np.broadcast_to(q_block, (len(ids), 2, 2))
-        for i, k in enumerate(np.asarray(ids).tolist()):
-            h = self._fresh(int(k), t)
-            if h is None or not h.converged or h.P is None:
-                continue
-            p, v, P = np.array([h.x, h.y]), np.array([h.vx, h.vy]), np.asarray(h.P, float).reshape(4, 4)
-            m0, J0 = bearing_and_rate(p, v, h.t, t0, o0, u)
-            m1, J1 = bearing_and_rate(p, v, h.t, t, o1, u)
-            c, var_c = curvature(m0, J0, m1, J1, t - t0, P)
-            k_sig = K_SIGMA if h.usable else K_SIGMA_UNOBSERVABLE
-            if abs(c) - k_sig * np.sqrt(max(var_c, 0.0)) <= np.sqrt(P0[i, 0, 0]):
-                continue  # the model's unmodelled bearing change is within its sigma: it predicts
-            c0, c1 = J0 @ P @ J0.T, J1 @ P @ J1.T
-            ut = unscented(p, v, P, h.t, t, o1, u) if h.usable and UNSCENTED else None
-            if ut is not None:  # the range is known: the nonlinear spread near the approach
-                m1, c1 = ut
-            if not (usable_covariance(c0) and usable_covariance(c1)):
-                continue
-            if not consistent(m0, c0, x0[i], P0[i]):  # the track's [theta, theta'] of the last cycle
-                continue
-            if not consistent(m1[:1], c1[:1, :1], x1[i, :1], P1[i, :1, :1]):  # its model prediction
-                continue
-            pos.append(i)
-            means.append(m1)
-            covs.append(c1 + qb[i])
+        if self.prev is not None and self.own is not None and self.hints and self.own[0] > self.prev[0]:
+            (t0, ox0, oy0), (t, ox, oy) = self.prev, self.own
+            qb = np.broadcast_to(q_block, (len(ids), 2, 2))
+            for i, k in enumerate(np.asarray(ids).tolist()):
+                h = self._fresh(int(k), t)
+                out = None if h is None else predict(h, t0, np.array([ox0, oy0]), t, np.array([ox, oy]),
+                                                     x0[i], P0[i], x1[i], P1[i])
+                if out is not None:
+                    pos.append(i)
+                    means.append(out[0])
+                    covs.append(out[1] + qb[i])
         if not pos:
             return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
         return np.asarray(pos, np.intp), np.asarray(means), np.asarray(covs)

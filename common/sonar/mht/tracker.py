@@ -78,7 +78,7 @@ from common.sonar.bearing.model import detection_probability, measurement_matrix
 from common.sonar.bearing.multiline import NEW
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
-from common.sonar.bearing.tma_prediction import with_bearing
+from common.sonar.bearing.tma_prediction import MAX_SIGMA, with_bearing
 from common.sonar.bearing.tracker import Cycle
 from common.sonar.mht.hypotheses import (
     LN_2PI,
@@ -227,7 +227,8 @@ class MhtTracker:
         _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
         drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)
         by_tma = np.r_[by_tma, np.zeros(drop.size - by_tma.size, bool)]  # tracks split or opened: none
-        drop |= (np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)) & ~by_tma
+        sig = np.sqrt(Pi[:, 0, 0])  # a track with a fresh solution: up to tma_prediction's MAX_SIGMA
+        drop |= (sig > math.radians(mp.sigma_max_deg)) & ~(by_tma & (sig <= MAX_SIGMA))
         for u in tr.uid[drop & (tr.ever_confirmed)]:
             self.retro.retire(int(u))
         live_h = ~drop[self.ht]
