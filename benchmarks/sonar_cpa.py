@@ -30,8 +30,9 @@ import argparse
 import math
 import sys
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -68,9 +69,33 @@ class CpaRun:
     nees: float
 
 
+@dataclass
+class Trace:
+    """What a run leaves, in one process or through the processes: per cycle the time, own
+    position, truth [x, y, vx, vy] of the target and the track numbers near its bearing
+    (confirmed, within GATE sigma0) and confirmed; the last TMA solution of every track."""
+
+    times: list[float] = field(default_factory=list)
+    own: list[tuple[float, float]] = field(default_factory=list)
+    truth: list[list[float]] = field(default_factory=list)
+    near: list[list[int]] = field(default_factory=list)
+    confirmed: list[set[int]] = field(default_factory=list)
+    solutions: dict[int, dict[str, Any]] = field(default_factory=dict)
+
+    def cycle(self, t: float, own: tuple[float, float], tr: dict[str, Any], ids: np.ndarray,
+              conf: np.ndarray, brg: np.ndarray, sigma0: float) -> None:
+        """One tracker cycle against the truth message of its time."""
+        self.times.append(t)
+        self.own.append(own)
+        self.truth.append([tr["x"][0], tr["y"][0], tr["vx"][0], tr["vy"][0]])
+        near = conf & (np.abs(wrap_pi(brg - tr["brg"][0])) <= GATE * sigma0)
+        self.near.append([int(i) for i in ids[near]])
+        self.confirmed.append({int(i) for i in ids[conf]})
+
+
 def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
-    """One scene, one seed, one association mode; feedback: the TMA solutions given back to
-    the tracker (common.sonar.bearing.range_noise)."""
+    """One scene, one seed, one association mode in one process; feedback: the TMA solutions
+    given back to the tracker as the bearing-tracker service does (tma_hints_from)."""
     cfg = load(path)
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
@@ -79,24 +104,14 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
     trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
                           arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mgr = TmaManager(arr.id)
-    times, own, truth, numbers, conf_after = [], [], [], [], []
-    first: int | None = None
-    report = None
+    trace = Trace()
     for _, msgs in run_scenario(load_scenario(doc), [], cfg.arrays, seed):
         tr = next(m for k, m in msgs if k == "sim/truth/sonar")
         det = next(m for k, m in msgs if k.startswith("sonar/detections/"))
         o = det["own"]
         c = trk.step(det["t"], np.asarray(det["brg"]), np.asarray(det["amp"]), o["heading"], o["x"], o["y"],
                      sbrg=np.asarray(det["sbrg"]))
-        times.append(det["t"])
-        own.append((o["x"], o["y"]))
-        truth.append([tr["x"][0], tr["y"][0], tr["vx"][0], tr["vy"][0]])
-        near = c.confirmed & (np.abs(wrap_pi(c.x[:, 0] - tr["brg"][0])) <= GATE * arr.sigma0)
-        numbers.extend(int(i) for i in c.ids[near] if int(i) not in numbers)
-        if first is None and numbers:
-            first = numbers[0]
-        if first is not None:
-            conf_after.append(bool(np.any(c.ids[c.confirmed] == first)))
+        trace.cycle(det["t"], (o["x"], o["y"]), tr, c.ids, c.confirmed, c.x[:, 0], arr.sigma0)
         mgr.add_own(det["t"], o["x"], o["y"])
         mgr.push(BTracks(det["t"], arr.id, [BTrack(int(i), bool(k), x, P.ravel())
                                             for i, k, x, P in zip(c.ids, c.confirmed, c.x, c.P)]))
@@ -108,26 +123,75 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
                     cols = h[1]
                     rows = np.column_stack([cols[k] for k in ("t", "brg", "sbrg", "own_x", "own_y")])
                     hist[tid] = TrackHistory(tid, h[0], rows)
-            report = mgr.step(b, hist)
+            msg = tma_message(mgr.step(b, hist))
+            trace.solutions = {s["track"]: s for s in msg["solutions"]}
             if feedback:  # the solutions back to the tracker for its later cycles, as the service
-                for tid, hint in tma_hints_from(tma_message(report)):
+                for tid, hint in tma_hints_from(msg):
                     trk.tma_hint(tid, hint)
-    t, xy, x = np.asarray(times), np.asarray(own), np.asarray(truth)
+    return score(trace, doc, arr.sigma0)
+
+
+def run_processes(path: Path, seed: int, mode: str, workdir: Path, speed: float = 300.0) -> CpaRun:
+    """One scene, one seed, one mode through the processes: a router, the bearing-tracker
+    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode) and
+    the simulator at ``speed`` x real time (the TMA solution of a scan is back at the
+    tracker before the next scan)."""
+    from common.bus.local_run import Deployment
+
+    workdir.mkdir(parents=True, exist_ok=True)
+    scene = workdir / path.name
+    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n')
+    cfg = load(scene)
+    arr = cfg.arrays[0]
+    doc = tomllib.loads(scene.read_text())
+    n = int(doc["sim"]["n_scans"])
+    with Deployment(workdir) as d:
+        for key in (f"sonar/btracks/{arr.id}", f"sonar/tma/{arr.id}", "sim/truth/sonar"):
+            d.collect(key)
+        d.start("btracker", "bearing-tracker", "--config", str(scene), "--array", arr.id)
+        d.start("tma", "tma", "--config", str(scene), "--array", arr.id)
+        alive = [f"bearing_tracker/{arr.id}", f"tma/{arr.id}"]
+        d.wait_alive(alive)
+        d.simulate(scene, seed=seed, wait_alive=alive, speed=speed)
+        d.wait_for(lambda: len(d.of(f"sonar/tma/{arr.id}")) >= n, 60)
+        bt, tma = d.of(f"sonar/btracks/{arr.id}"), d.of(f"sonar/tma/{arr.id}")
+        truth = {m["t"]: m for m in d.of("sim/truth/sonar")}
+    trace = Trace()
+    for m in sorted(bt, key=lambda m: m["t"]):
+        tr = truth[m["t"]]
+        tracks = m["tracks"]
+        trace.cycle(m["t"], (tr["own"]["x"], tr["own"]["y"]), tr, np.array([k["id"] for k in tracks], int),
+                    np.array([k["status"] == "confirmed" for k in tracks], bool),
+                    np.array([k["x"][0] for k in tracks], float), arr.sigma0)
+    last = max(tma, key=lambda m: m["t"])
+    trace.solutions = {s["track"]: s for s in last["solutions"]}
+    return score(trace, doc, arr.sigma0)
+
+
+def score(trace: Trace, doc: dict[str, Any], sigma0: float) -> CpaRun:
+    """The run's numbers (module docstring) from its trace."""
+    numbers: list[int] = []
+    for near in trace.near:
+        numbers.extend(i for i in near if i not in numbers)
+    first = numbers[0] if numbers else None
+    k0 = next((k for k, near in enumerate(trace.near) if near), len(trace.near))
+    conf_after = [first in c for c in trace.confirmed[k0:]]
+    t, xy, x = np.asarray(trace.times), np.asarray(trace.own), np.asarray(trace.truth)
     t_cpa = float(t[np.argmin(np.hypot(*(x[:, :2] - xy).T))])
-    sol = dict(report.solutions).get(first) if report is not None and first is not None else None
+    sol = trace.solutions.get(first) if first is not None else None
     held = float(np.mean(conf_after)) if conf_after else 0.0
-    t_eval = float(t[-1]) if sol is None else sol.t
+    t_eval = float(t[-1]) if sol is None else float(sol["t"])
     turns = bool(doc["sim"]["sonar"]["own"].get("leg"))  # without a turn the range is unobservable
-    bound = position_rms_bound(x[0], t, xy, arr.sigma0, float(t[0]), t_eval) if turns else math.inf
+    bound = position_rms_bound(x[0], t, xy, sigma0, float(t[0]), t_eval) if turns else math.inf
     if sol is None:
         return CpaRun(len(numbers), held, False, math.nan, bound, math.nan)
-    k = int(np.searchsorted(t, sol.t))
-    e = np.array([sol.x, sol.y, sol.vx, sol.vy]) - x[k]
+    k = int(np.searchsorted(t, sol["t"]))
+    e = np.array([sol["x"], sol["y"], sol["vx"], sol["vy"]]) - x[k]
     try:
-        nees = float(quadratic_form(e, np.asarray(sol.P, float).reshape(4, 4)))
+        nees = float(quadratic_form(e, np.asarray(sol["P"], float).reshape(4, 4)))
     except np.linalg.LinAlgError:  # a singular published P (unobservable range)
         nees = math.inf
-    return CpaRun(len(numbers), held, sol.t > t_cpa, float(np.hypot(e[0], e[1])), bound, nees)
+    return CpaRun(len(numbers), held, sol["t"] > t_cpa, float(np.hypot(e[0], e[1])), bound, nees)
 
 
 def summary(runs: list[CpaRun]) -> tuple[dict[str, float], bool]:

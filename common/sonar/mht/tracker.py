@@ -167,6 +167,8 @@ class MhtTracker:
         k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
             tr.uid[self.ht], self.hx[:, :2], self.hP[:, :2, :2], xp[:, :2], Pp[:, :2, :2], Qm[:, :2, :2])
         xp, Pp = with_bearing(xp, Pp, k, m2, C2)
+        Fh = np.repeat(F[None], xp.shape[0], axis=0)  # per hypothesis, for the retrodiction:
+        Fh[k, :2, :] = 0.0  # a bearing block from the TMA solution does not depend on x(k-1)
         by_tma = self.range_noise.solved(tr.uid)  # not deleted for its bearing sigma
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
@@ -197,7 +199,7 @@ class MhtTracker:
         heads, cx, cP, cc = merge_apply(cx, cP, cc, head)
         ct, cpar, cmeas, cm = ct[heads], cpar[heads], cmeas[heads], cm[heads]
         self.hx, self.hP, self.hc, self.ht, self.hmeas, self.hm = cx, cP, cc, ct, cmeas, cm
-        x_pre, P_pre = xp[cpar], Pp[cpar]
+        x_pre, P_pre, F_pre = xp[cpar], Pp[cpar], Fh[cpar]
         cpar = src[cpar]  # the retrodiction's parents: the hypotheses of the previous cycle
 
         unused = np.ones(z.shape[0], dtype=bool)
@@ -209,6 +211,7 @@ class MhtTracker:
                               if zs.size else np.full((cmeas.size, 2), np.nan), zs[unused]])
         x_pre = np.concatenate([x_pre, self.hx[-n_new:] if n_new else x_pre[:0]])
         P_pre = np.concatenate([P_pre, self.hP[-n_new:] if n_new else P_pre[:0]])
+        F_pre = np.concatenate([F_pre, np.repeat(F[None], n_new, axis=0)])
         cpar = np.concatenate([cpar, np.full(n_new, -1, dtype=np.intp)])
 
         LR = track_sums(self.hc, self.ht, tr.size)  # 000 LR_i = sum_h c_ih
@@ -235,7 +238,7 @@ class MhtTracker:
         remap = np.cumsum(~drop) - 1
         self.hx, self.hP, self.hc = self.hx[live_h], self.hP[live_h], self.hc[live_h]
         self.ht, self.hmeas, self.hm = remap[self.ht[live_h]], self.hmeas[live_h], self.hm[live_h]
-        x_pre, P_pre, cpar, det = x_pre[live_h], P_pre[live_h], cpar[live_h], det[live_h]
+        x_pre, P_pre, F_pre, cpar, det = x_pre[live_h], P_pre[live_h], F_pre[live_h], cpar[live_h], det[live_h]
         tr.keep(~drop)
         det[tr.IN[self.ht] >= 0] = np.nan  # a resolution conflict's detections may be the other's
         xi, Pi = xi[~drop], Pi[~drop]
@@ -245,7 +248,7 @@ class MhtTracker:
                                 np.full(tr.size, own_x), np.full(tr.size, own_y),
                                 np.full((tr.size, 2), np.nan)])
         self.retro.push(CycleRecord(self.hx, self.hP, self.hc, self.ht, tr.uid.copy(), cpar,
-                                    x_pre, P_pre, F, rows, det))  # 000 retrodiction
+                                    x_pre, P_pre, F_pre, rows, det))  # 000 retrodiction
         self.retro.compact(tr.uid)
         self.range_noise.forget(tr.uid)
         self.n_hyp_max = max(self.n_hyp_max, int(np.bincount(self.ht).max(initial=0)))
