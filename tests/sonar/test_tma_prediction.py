@@ -100,11 +100,13 @@ def test_a_wrong_solution_cannot_capture_the_track(bad: str) -> None:
     x1, P1 = model(t0, 60.0)
     h = {"not converged": hint(converged=False),
          "no P": TmaHint(0.0, *TGT, True, None, True),
-         # a contact 40 deg off the track's bearing at t0 (another contact's solution)
-         "another contact": hint(shift=np.array([-2500.0, -1000.0, 0.0, 0.0])),
+         # the mirror contact, passing 600 m West: 77 deg off the track at t0
+         "another contact": hint(shift=np.array([-1200.0, 0.0, 0.0, 0.0])),
          "far from the model": hint()}[bad]
     if bad == "far from the model":  # the model's prediction tight and 90 deg away
         x1 = x1 + np.array([math.pi / 2.0, 0.0])
+    if bad == "another contact":  # the model's prediction so wide that only the track's last estimate tells
+        P1 = P1 * 1e6
     assert predict(h, t0, own(t0), t1, own(t1), x0, P0, x1, P1) is None
 
 
