@@ -51,11 +51,12 @@ T, SMOOTH, OWN, DET = 0, slice(1, 3), slice(3, 5), slice(5, 7)
 class CycleRecord:
     """One cycle: hypotheses x (H, n), P (H, n, n), c (H,), track (H,) index into uid
     (T,), parent (H,) index into the previous record's hypotheses (-1: none), x_pre,
-    P_pre the prediction updated into each hypothesis, F (n, n) or (H, n, n) its transition from
-    the previous cycle (000 F; zero bearing rows where the bearing block was predicted from
-    the contact's TMA solution, common.sonar.bearing.tma_prediction), rows (T, 7) the register block of this cycle (t, smoothed brg and
-    sbrg, own x and y, the main hypothesis's detection brg and sbrg), det (H, 2) the
-    detection (brg, sbrg) each hypothesis was formed from (NaN: none)."""
+    P_pre the prediction updated into each hypothesis, F (n, n) or (H, n, n) its transition
+    from the previous cycle (000 F; zero bearing rows where the bearing block was predicted
+    from the contact's TMA solution, common.sonar.bearing.tma_prediction), rows (T, 7) the
+    register block of this cycle (t, smoothed brg and sbrg, own x and y, the main
+    hypothesis's detection brg and sbrg), det (H, 2) the detection (brg, sbrg) each
+    hypothesis was formed from (NaN: none)."""
 
     x: np.ndarray
     P: np.ndarray
