@@ -142,3 +142,4 @@ def test_issue_31_geometry_is_followed_through_the_approach(mode: str, seed: int
     r = run_once(COARSE, seed, mode)
     assert good(r), r
     assert not good(run_once(COARSE, seed, mode, feedback=False))
+
