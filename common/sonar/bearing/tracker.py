@@ -13,7 +13,8 @@ time only:
      frozen tracks whose order is sure is released for the scan (deviation;
      common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
-     common.sonar.bearing.range_noise;
+     common.sonar.bearing.range_noise and, near a closest approach, its bearing and
+     bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)

@@ -4,7 +4,9 @@ multiples hipotesis"), the `mode_association = "mht"` of the bearing tracker.
 A track i is a weighted set of hypotheses (x_ij, P_ij, c_ij), held for all tracks in flat
 arrays (common.sonar.mht.hypotheses); its published state and covariance are the
 mixture's moments. One `MhtTracker.step` per detection list (clock cycle k -> k+1):
-  1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q);
+  1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q); near a
+     closest approach the bearing block from the contact's TMA solution
+     (common.sonar.bearing.tma_prediction; its F's bearing rows zero for the retrodiction);
   2. gate y' S^-1 y < lambda^2 per hypothesis x measurement (common.core.gating: a batched
      Mahalanobis gate with the largest R, then the exact S of each pair);
   3. new hypotheses: one missed detection plus one Kalman update per gated measurement,
@@ -26,7 +28,8 @@ Deviations (stated):
   deleted after `n_delete` cycles in a row as tentative without LR > B (a confirmed track
   that SA demotes gets those cycles too: its misses while still confirmed do not count),
   and any track whose bearing sigma exceeds `sigma_max_deg` (a target lost for good would
-  otherwise coast forever).
+  otherwise coast forever), except a track with a fresh converged TMA solution while its
+  sigma stays within tma_prediction's MAX_SIGMA (a wide, honest prediction near an approach).
 - "Covariances not excessive" (track merge): both bearing sigmas below `merge_sigma_max_deg`.
 - Order: conflicts before pruning (the seed: after the Kalman update): pruning sees their weights.
 - Conflict start: besides the seed's rule (the main hypotheses of two confirmed tracks
