@@ -3,10 +3,15 @@ that moves 10-50 deg between samples, and does TMA solve after the approach? In 
 process: simulator -> bearing tracker (common.sonar.trackers.bearing_tracker, the
 scene's [sonar.tracker]) -> TMA manager (common.sonar.tma.manager.TmaManager, defaults)
 fed from the tracker's bearing register, as services/tma is; each TMA solution is given
-back to the tracker as a hint for its later cycles (common.sonar.bearing.range_noise;
-run_once(..., feedback=False) without). Figures: docs/decisions/018-range-matched-bearing-noise.md.
+back to the tracker as a hint for its later cycles, as the bearing-tracker service takes
+them from sonar/tma/<a> (common.sonar.bearing.range_noise, tma_prediction;
+run_once(..., feedback=False) without). Figures: docs/decisions/026-tma-predicted-bearing.md
+(and 018 before it).
 
 Run: .venv/bin/python benchmarks/sonar_cpa.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
+[--processes] (through a real router and the bearing-tracker and tma processes, the
+simulator at 300 x real time: the same numbers as in one process when every TMA solution
+is back before the next scan; about 8 s a run).
 
 Scenes (scenarios/, docs/scenarios.md): sonar_cpa_coarse (60 s sampling, CPA 0.5 km,
 own-ship turn), sonar_cpa_fine_300m (30 s, 0.3 km, no turn), sonar_cpa_coarse_1km (60 s,
@@ -29,9 +34,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import tempfile
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -46,8 +53,9 @@ from common.sim.simulator import load_scenario  # noqa: E402
 from common.sonar.mht.params import MhtParams, SonarTrackerParams  # noqa: E402
 from common.sonar.tma.crlb import position_rms_bound  # noqa: E402
 from common.sonar.tma.manager import BTrack, BTracks, TmaManager, TrackHistory  # noqa: E402
-from common.sonar.trackers import TmaHint, bearing_tracker  # noqa: E402
+from common.sonar.trackers import bearing_tracker  # noqa: E402
 from common.wire.sim_messages import run_scenario  # noqa: E402
+from common.wire.sonar_messages import tma_hints_from, tma_message  # noqa: E402
 
 CASES = ("sonar_cpa_coarse", "sonar_cpa_fine_300m", "sonar_cpa_coarse_1km", "sonar_cpa_fine_1km_turn")
 MODES = ("gnn", "mht")
@@ -67,9 +75,33 @@ class CpaRun:
     nees: float
 
 
+@dataclass
+class Trace:
+    """What a run leaves, in one process or through the processes: per cycle the time, own
+    position, truth [x, y, vx, vy] of the target and the track numbers near its bearing
+    (confirmed, within GATE sigma0) and confirmed; the last TMA solution of every track."""
+
+    times: list[float] = field(default_factory=list)
+    own: list[tuple[float, float]] = field(default_factory=list)
+    truth: list[list[float]] = field(default_factory=list)
+    near: list[list[int]] = field(default_factory=list)
+    confirmed: list[set[int]] = field(default_factory=list)
+    solutions: dict[int, dict[str, Any]] = field(default_factory=dict)
+
+    def cycle(self, t: float, own: tuple[float, float], tr: dict[str, Any], ids: np.ndarray,
+              conf: np.ndarray, brg: np.ndarray, sigma0: float) -> None:
+        """One tracker cycle against the truth message of its time."""
+        self.times.append(t)
+        self.own.append(own)
+        self.truth.append([tr["x"][0], tr["y"][0], tr["vx"][0], tr["vy"][0]])
+        near = conf & (np.abs(wrap_pi(brg - tr["brg"][0])) <= GATE * sigma0)
+        self.near.append([int(i) for i in ids[near]])
+        self.confirmed.append({int(i) for i in ids[conf]})
+
+
 def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
-    """One scene, one seed, one association mode; feedback: the TMA solutions given back to
-    the tracker (common.sonar.bearing.range_noise)."""
+    """One scene, one seed, one association mode in one process; feedback: the TMA solutions
+    given back to the tracker as the bearing-tracker service does (tma_hints_from)."""
     cfg = load(path)
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
@@ -78,24 +110,14 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
     trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
                           arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mgr = TmaManager(arr.id)
-    times, own, truth, numbers, conf_after = [], [], [], [], []
-    first: int | None = None
-    report = None
+    trace = Trace()
     for _, msgs in run_scenario(load_scenario(doc), [], cfg.arrays, seed):
         tr = next(m for k, m in msgs if k == "sim/truth/sonar")
         det = next(m for k, m in msgs if k.startswith("sonar/detections/"))
         o = det["own"]
         c = trk.step(det["t"], np.asarray(det["brg"]), np.asarray(det["amp"]), o["heading"], o["x"], o["y"],
                      sbrg=np.asarray(det["sbrg"]))
-        times.append(det["t"])
-        own.append((o["x"], o["y"]))
-        truth.append([tr["x"][0], tr["y"][0], tr["vx"][0], tr["vy"][0]])
-        near = c.confirmed & (np.abs(wrap_pi(c.x[:, 0] - tr["brg"][0])) <= GATE * arr.sigma0)
-        numbers.extend(int(i) for i in c.ids[near] if int(i) not in numbers)
-        if first is None and numbers:
-            first = numbers[0]
-        if first is not None:
-            conf_after.append(bool(np.any(c.ids[c.confirmed] == first)))
+        trace.cycle(det["t"], (o["x"], o["y"]), tr, c.ids, c.confirmed, c.x[:, 0], arr.sigma0)
         mgr.add_own(det["t"], o["x"], o["y"])
         mgr.push(BTracks(det["t"], arr.id, [BTrack(int(i), bool(k), x, P.ravel())
                                             for i, k, x, P in zip(c.ids, c.confirmed, c.x, c.P)]))
@@ -107,27 +129,75 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
                     cols = h[1]
                     rows = np.column_stack([cols[k] for k in ("t", "brg", "sbrg", "own_x", "own_y")])
                     hist[tid] = TrackHistory(tid, h[0], rows)
-            report = mgr.step(b, hist)
-            if feedback:  # the solutions back to the tracker for its later cycles (range_noise)
-                for tid, out in report.solutions:
-                    usable = out.converged and out.range_observable
-                    trk.tma_hint(tid, TmaHint(out.t, out.x, out.y, out.vx, out.vy, usable))
-    t, xy, x = np.asarray(times), np.asarray(own), np.asarray(truth)
+            msg = tma_message(mgr.step(b, hist))
+            trace.solutions = {s["track"]: s for s in msg["solutions"]}
+            if feedback:  # the solutions back to the tracker for its later cycles, as the service
+                for tid, hint in tma_hints_from(msg):
+                    trk.tma_hint(tid, hint)
+    return score(trace, doc, arr.sigma0)
+
+
+def run_processes(path: Path, seed: int, mode: str, workdir: Path, speed: float = 300.0) -> CpaRun:
+    """One scene, one seed, one mode through the processes: a router, the bearing-tracker
+    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode) and
+    the simulator at ``speed`` x real time (the TMA solution of a scan is back at the
+    tracker before the next scan)."""
+    from common.bus.local_run import Deployment
+
+    workdir.mkdir(parents=True, exist_ok=True)
+    scene = workdir / path.name
+    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n')
+    cfg = load(scene)
+    arr = cfg.arrays[0]
+    doc = tomllib.loads(scene.read_text())
+    n = int(doc["sim"]["n_scans"])
+    with Deployment(workdir) as d:
+        for key in (f"sonar/btracks/{arr.id}", f"sonar/tma/{arr.id}", "sim/truth/sonar"):
+            d.collect(key)
+        d.start("btracker", "bearing-tracker", "--config", str(scene), "--array", arr.id)
+        d.start("tma", "tma", "--config", str(scene), "--array", arr.id)
+        alive = [f"bearing_tracker/{arr.id}", f"tma/{arr.id}"]
+        d.wait_alive(alive)
+        d.simulate(scene, seed=seed, wait_alive=alive, speed=speed)
+        d.wait_for(lambda: len(d.of(f"sonar/tma/{arr.id}")) >= n, 60)
+        bt, tma = d.of(f"sonar/btracks/{arr.id}"), d.of(f"sonar/tma/{arr.id}")
+        truth = {m["t"]: m for m in d.of("sim/truth/sonar")}
+    trace = Trace()
+    for m in sorted(bt, key=lambda m: m["t"]):
+        tr = truth[m["t"]]
+        tracks = m["tracks"]
+        trace.cycle(m["t"], (tr["own"]["x"], tr["own"]["y"]), tr, np.array([k["id"] for k in tracks], int),
+                    np.array([k["status"] == "confirmed" for k in tracks], bool),
+                    np.array([k["x"][0] for k in tracks], float), arr.sigma0)
+    last = max(tma, key=lambda m: m["t"])
+    trace.solutions = {s["track"]: s for s in last["solutions"]}
+    return score(trace, doc, arr.sigma0)
+
+
+def score(trace: Trace, doc: dict[str, Any], sigma0: float) -> CpaRun:
+    """The run's numbers (module docstring) from its trace."""
+    numbers: list[int] = []
+    for near in trace.near:
+        numbers.extend(i for i in near if i not in numbers)
+    first = numbers[0] if numbers else None
+    k0 = next((k for k, near in enumerate(trace.near) if near), len(trace.near))
+    conf_after = [first in c for c in trace.confirmed[k0:]]
+    t, xy, x = np.asarray(trace.times), np.asarray(trace.own), np.asarray(trace.truth)
     t_cpa = float(t[np.argmin(np.hypot(*(x[:, :2] - xy).T))])
-    sol = dict(report.solutions).get(first) if report is not None and first is not None else None
+    sol = trace.solutions.get(first) if first is not None else None
     held = float(np.mean(conf_after)) if conf_after else 0.0
-    t_eval = float(t[-1]) if sol is None else sol.t
+    t_eval = float(t[-1]) if sol is None else float(sol["t"])
     turns = bool(doc["sim"]["sonar"]["own"].get("leg"))  # without a turn the range is unobservable
-    bound = position_rms_bound(x[0], t, xy, arr.sigma0, float(t[0]), t_eval) if turns else math.inf
+    bound = position_rms_bound(x[0], t, xy, sigma0, float(t[0]), t_eval) if turns else math.inf
     if sol is None:
         return CpaRun(len(numbers), held, False, math.nan, bound, math.nan)
-    k = int(np.searchsorted(t, sol.t))
-    e = np.array([sol.x, sol.y, sol.vx, sol.vy]) - x[k]
+    k = int(np.searchsorted(t, sol["t"]))
+    e = np.array([sol["x"], sol["y"], sol["vx"], sol["vy"]]) - x[k]
     try:
-        nees = float(quadratic_form(e, np.asarray(sol.P, float).reshape(4, 4)))
+        nees = float(quadratic_form(e, np.asarray(sol["P"], float).reshape(4, 4)))
     except np.linalg.LinAlgError:  # a singular published P (unobservable range)
         nees = math.inf
-    return CpaRun(len(numbers), held, sol.t > t_cpa, float(np.hypot(e[0], e[1])), bound, nees)
+    return CpaRun(len(numbers), held, sol["t"] > t_cpa, float(np.hypot(e[0], e[1])), bound, nees)
 
 
 def summary(runs: list[CpaRun]) -> tuple[dict[str, float], bool]:
@@ -153,12 +223,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, default=20)
     ap.add_argument("--case", nargs="*", default=list(CASES))
     ap.add_argument("--mode", nargs="*", default=list(MODES), choices=MODES)
+    ap.add_argument("--processes", action="store_true",
+                    help="through the real router, bearing-tracker and tma processes (run_processes)")
     a = ap.parse_args(argv)
+    tmp = Path(tempfile.mkdtemp(prefix="sonar_cpa_"))
     ok = True
     print(f"{'scene':<26}{'mode':>5}{'runs':>5}{'1 number':>9}{'min held':>9}{'solved':>7}{'CRLB m':>9}"
           f"{'RMS/CRLB':>9}{'max/CRLB':>9}{'NEES':>9}")
     for case, mode in [(c, m) for c in a.case for m in a.mode]:
-        runs = [run_once(REPO / "scenarios" / f"{case}.toml", s, mode) for s in range(1, a.runs + 1)]
+        path = REPO / "scenarios" / f"{case}.toml"
+        runs = [run_processes(path, s, mode, tmp / f"{case}-{mode}-{s}") if a.processes
+                else run_once(path, s, mode) for s in range(1, a.runs + 1)]
         row, good = summary(runs)
         ok &= good
         print(f"{case:<26}{mode:>5}{len(runs):>5}{row['one number']:>9}{row['min held']:>9.2f}{row['solved']:>7}"

@@ -125,7 +125,8 @@ def grants(cfg: Config) -> dict[str, Grant]:
                                ["radar/gtracks", "sim/truth/radar", "sim/status"])
     for a in cfg.arrays:
         bt = g[f"bearing-tracker-{a.id}"] = _service(
-            "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"], [f"sonar/detections/{a.id}"])
+            "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"],
+            [f"sonar/detections/{a.id}", f"sonar/tma/{a.id}"])
         bt.serve.append(f"sonar/history/{a.id}/*")
         tma = g[f"tma-{a.id}"] = _service(
             "tma", a.id, [f"sonar/tma/{a.id}", f"sonar/tma/ack/{a.id}"],

@@ -12,6 +12,7 @@ import numpy as np
 
 from common.core.params import ParamError
 from common.core.rejection import Rejected
+from common.sonar.bearing.range_noise import TmaHint
 from common.sonar.bearing.tracker import Cycle
 from common.sonar.tma.bearings_only import Support
 from common.sonar.tma.bounds import MINIMAL_BOUNDS, Bounds
@@ -93,6 +94,20 @@ def _solution(track: int, c: CycleOutput) -> dict[str, Any]:
         "residual_factor": c.residual_factor, "legs": list(c.legs),
         "converged": c.converged, "ctma_exhausted": c.ctma_exhausted, "range_observable": c.range_observable,
     }
+
+
+def tma_hints_from(msg: dict[str, Any]) -> list[tuple[int, TmaHint]]:
+    """(track, TmaHint) of each solution of a tma message, as the bearing tracker uses them
+    (common.sonar.bearing.range_noise, tma_prediction); a solution without the flags (an
+    older publisher) is neither converged nor usable."""
+    out = []
+    for s in msg["solutions"]:
+        conv = bool(s.get("converged", False))
+        usable = conv and bool(s.get("range_observable", False))
+        out.append((int(s["track"]), TmaHint(float(s["t"]), float(s["x"]), float(s["y"]), float(s["vx"]),
+                                             float(s["vy"]), usable, np.asarray(s["P"], float).reshape(4, 4),
+                                             conv)))
+    return out
 
 
 def bounds_from(msg: dict[str, Any]) -> tuple[Bounds, int | None]:

@@ -3,7 +3,11 @@
 Subscribes root/sonar/detections/A, publishes root/sonar/btracks/A each cycle and
 answers root/sonar/history/A/<id> with the bearing register of a confirmed track
 (docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
-main hypothesis, with the retrodicted bearings beside). Parameters:
+main hypothesis, with the retrodicted bearings beside). Also subscribes
+root/sonar/tma/A: each solution is kept as its track's hint for the later cycles
+(common.sonar.bearing.range_noise, tma_prediction; docs/decisions/026); a tma message
+publishes nothing, so the loop tracker -> tma -> tracker is one step per detection list,
+never waited for. Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
 [sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only); the
 core is built by common.sonar.trackers.bearing_tracker.
@@ -23,7 +27,7 @@ from common.deploy.config import section
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
 from common.sonar.trackers import BearingTrackerCore, bearing_tracker
 from common.wire import protocol
-from common.wire.sonar_messages import btracks_message, history_message
+from common.wire.sonar_messages import btracks_message, history_message, tma_hints_from
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -80,6 +84,16 @@ def main(args: argparse.Namespace) -> int:
         query.reply(query.key_expr, protocol.encode(
             history_message(arr.id, float(core.t or 0.0), int(chunk), found)))
 
+    def on_tma(key: str, payload: bytes) -> None:
+        msg = protocol.decode("tma", payload)
+        if msg["array"] != arr.id:
+            raise Rejected("unknown_array", f"array '{msg['array']}' on {key}")
+        if not cores:
+            return
+        for tid, hint in tma_hints_from(msg):
+            cores[0].tma_hint(tid, hint)
+
     svc.subscribe(f"sonar/detections/{arr.id}", on_det)
+    svc.subscribe(f"sonar/tma/{arr.id}", on_tma)
     svc.serve(f"sonar/history/{arr.id}/*", on_query)
     return svc.run()

@@ -19,18 +19,20 @@ Q = 1e-8
 
 def test_no_fresh_usable_hint_leaves_q() -> None:
     rn = RangeNoise(max_age=100.0)
-    rn.q_theta(np.array([1, 2]), Q, 0.0, 0.0, 0.0)
+    rn.cycle(0.0, 0.0, 0.0)
     rn.set(1, TmaHint(0.0, 0.0, 1000.0, 10.0, 0.0, usable=False))
     rn.set(2, TmaHint(-500.0, 0.0, 1000.0, 10.0, 0.0))  # older than max_age at t = 60
-    assert np.all(rn.q_theta(np.array([1, 2, 3]), Q, 60.0, 0.0, 0.0) == Q)
+    rn.cycle(60.0, 0.0, 0.0)
+    assert np.all(rn.q_theta(np.array([1, 2, 3]), Q) == Q)
 
 
 def test_q_is_raised_by_the_bearing_acceleration_bound() -> None:
     """a = v^2 / r_min^2 with r_min the least range over the cycle (here the CPA, 1 km)."""
     rn = RangeNoise()
-    rn.q_theta(np.array([7]), Q, 0.0, 0.0, 0.0)
+    rn.cycle(0.0, 0.0, 0.0)
     rn.set(7, TmaHint(0.0, -300.0, 1000.0, 10.0, 0.0))  # passes 1 km North at t = 30 s
-    q = rn.q_theta(np.array([7]), Q, 60.0, 0.0, 0.0)[0]
+    rn.cycle(60.0, 0.0, 0.0)
+    q = rn.q_theta(np.array([7]), Q)[0]
     assert q == pytest.approx(Q + (10.0**2 / 1000.0**2) ** 2 * 60.0)
     rn.forget(np.array([3]))
     assert rn.hints == {}

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from common.sonar.tma.bounds import MINIMAL_BOUNDS
 from common.sonar.tma.manager import TmaReport
 from common.wire.protocol import DecodeError, decode, encode
-from common.wire.sonar_messages import tma_message
+from common.wire.sonar_messages import tma_hints_from, tma_message
 from tests.sonar.test_tma import OWN
 from tests.sonar.test_tma_flags import STRAIGHT, run
 
@@ -56,3 +56,16 @@ def test_decoder_refuses_non_bool_flags(flag: str, value: object):
     with pytest.raises(DecodeError) as e:
         decode("tma", msgpack.packb(bad, use_bin_type=True))
     assert e.value.field == f"solutions[0].{flag}"
+
+
+def test_tma_hints_for_the_bearing_tracker():
+    """What the bearing-tracker service takes from sonar/tma/<a> (issue 31 section 1): the
+    solution with its P and flags; an older publisher's solution, without flags, is neither
+    converged nor usable, so it never predicts a bearing (common.sonar.bearing.tma_prediction)."""
+    ((tid, h),) = tma_hints_from(decode("tma", encode(MSG)))
+    s = MSG["solutions"][0]
+    assert tid == 4 and (h.t, h.x, h.y, h.vx, h.vy) == (s["t"], s["x"], s["y"], s["vx"], s["vy"])
+    assert h.converged and h.usable and h.P is not None and h.P.shape == (4, 4)
+    old = {**MSG, "solutions": [{k: v for k, v in s.items() if k not in FLAGS}]}
+    ((_, h_old),) = tma_hints_from(decode("tma", encode(old)))
+    assert not h_old.converged and not h_old.usable

@@ -13,7 +13,8 @@ time only:
      frozen tracks whose order is sure is released for the scan (deviation;
      common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
-     common.sonar.bearing.range_noise;
+     common.sonar.bearing.range_noise and, near a closest approach, its bearing and
+     bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
@@ -60,6 +61,7 @@ from common.sonar.bearing.multiline import NEW, MultiLineGrouper, MultiLineTrack
 from common.sonar.bearing.pairs import centroid_update, release
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
+from common.sonar.bearing.tma_prediction import with_bearing
 
 
 @dataclass(frozen=True)
@@ -158,7 +160,9 @@ class BearingTracker:
         idx = tab.active_indices()
         x, P = tab.x[idx], tab.P[idx]
         T = t - tab.t_last[idx]
-        q_man = self.range_noise.q_theta(tab.id[idx], p.q_theta, t, own_x, own_y)  # issue 31
+        self.range_noise.cycle(t, own_x, own_y)  # issue 31: the contact's TMA solution
+        q_man = self.range_noise.q_theta(tab.id[idx], p.q_theta)
+        x0, P0 = x[:, :2].copy(), P[:, :2, :2].copy()
         if idx.size and self.imm is not None:  # 004 memory mode: quiet Q in both models
             memory = tab.ambiguous[idx] & (self.crossing is not None and self.crossing.memory)
             c, xm, Pm, x, P = self.imm.predict(tab.mu[idx], tab.xm[idx], tab.Pm[idx], T, self._F(T),
@@ -166,6 +170,13 @@ class BearingTracker:
         elif idx.size:
             x, P = predict(x, P, self._F(T), self._Q(T, q_man))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
+        if idx.size:  # the bearing block from the TMA solution (tma_prediction)
+            k, m2, C2 = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2],
+                                                       self._Q(T)[:, :2, :2])
+            x, P = with_bearing(x, P, k, m2, C2)
+            if k.size and self.imm is not None:
+                for j in range(xm.shape[1]):
+                    xm[:, j], Pm[:, j] = with_bearing(xm[:, j], Pm[:, j], k, m2, C2)
         conf = tab.status[idx] == Status.CONFIRMED
         p_d = (detection_probability(x[:, 2], np.sqrt(P[:, 2, 2]), p.p_d, p.d_thr)  # 000 P_D(erfc)
                if p.clutter_level_db > 0 else np.full(idx.size, p.p_d))

@@ -51,10 +51,12 @@ T, SMOOTH, OWN, DET = 0, slice(1, 3), slice(3, 5), slice(5, 7)
 class CycleRecord:
     """One cycle: hypotheses x (H, n), P (H, n, n), c (H,), track (H,) index into uid
     (T,), parent (H,) index into the previous record's hypotheses (-1: none), x_pre,
-    P_pre the prediction updated into each hypothesis, F the transition from the
-    previous cycle, rows (T, 7) the register block of this cycle (t, smoothed brg and
-    sbrg, own x and y, the main hypothesis's detection brg and sbrg), det (H, 2) the
-    detection (brg, sbrg) each hypothesis was formed from (NaN: none)."""
+    P_pre the prediction updated into each hypothesis, F (n, n) or (H, n, n) its transition
+    from the previous cycle (000 F; zero bearing rows where the bearing block was predicted
+    from the contact's TMA solution, common.sonar.bearing.tma_prediction), rows (T, 7) the
+    register block of this cycle (t, smoothed brg and sbrg, own x and y, the main
+    hypothesis's detection brg and sbrg), det (H, 2) the detection (brg, sbrg) each
+    hypothesis was formed from (NaN: none)."""
 
     x: np.ndarray
     P: np.ndarray
@@ -83,7 +85,8 @@ def smooth(records: list[CycleRecord]) -> list[tuple[np.ndarray, np.ndarray, np.
         p = nxt.parent[ch]
         Pp = rec.P[p]
         # W' = P^pre^-1 F P (P^pre symmetric): 000 W_h(l) = P_h(l) F' P^pre^-1(l+1)
-        Wt = np.linalg.solve(nxt.P_pre[ch], nxt.F @ Pp)
+        Fc = nxt.F[ch] if nxt.F.ndim == 3 else nxt.F  # one F (n, n) or one per hypothesis
+        Wt = np.linalg.solve(nxt.P_pre[ch], Fc @ Pp)
         W = np.swapaxes(Wt, 1, 2)
         xs = rec.x[p] + (W @ state_diff(xr_n[ch], nxt.x_pre[ch])[..., None])[..., 0]  # 000 x^retro
         Ps = Pp + W @ (Pr_n[ch] - nxt.P_pre[ch]) @ Wt  # 000 P^retro

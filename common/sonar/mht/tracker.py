@@ -4,7 +4,9 @@ multiples hipotesis"), the `mode_association = "mht"` of the bearing tracker.
 A track i is a weighted set of hypotheses (x_ij, P_ij, c_ij), held for all tracks in flat
 arrays (common.sonar.mht.hypotheses); its published state and covariance are the
 mixture's moments. One `MhtTracker.step` per detection list (clock cycle k -> k+1):
-  1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q);
+  1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q); near a
+     closest approach the bearing block from the contact's TMA solution
+     (common.sonar.bearing.tma_prediction; its F's bearing rows zero for the retrodiction);
   2. gate y' S^-1 y < lambda^2 per hypothesis x measurement (common.core.gating: a batched
      Mahalanobis gate with the largest R, then the exact S of each pair);
   3. new hypotheses: one missed detection plus one Kalman update per gated measurement,
@@ -26,7 +28,8 @@ Deviations (stated):
   deleted after `n_delete` cycles in a row as tentative without LR > B (a confirmed track
   that SA demotes gets those cycles too: its misses while still confirmed do not count),
   and any track whose bearing sigma exceeds `sigma_max_deg` (a target lost for good would
-  otherwise coast forever).
+  otherwise coast forever), except a track with a fresh converged TMA solution while its
+  sigma stays within tma_prediction's MAX_SIGMA (a wide, honest prediction near an approach).
 - "Covariances not excessive" (track merge): both bearing sigmas below `merge_sigma_max_deg`.
 - Order: conflicts before pruning (the seed: after the Kalman update): pruning sees their weights.
 - Conflict start: besides the seed's rule (the main hypotheses of two confirmed tracks
@@ -78,6 +81,7 @@ from common.sonar.bearing.model import detection_probability, measurement_matrix
 from common.sonar.bearing.multiline import NEW
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
+from common.sonar.bearing.tma_prediction import MAX_SIGMA, with_bearing
 from common.sonar.bearing.tracker import Cycle
 from common.sonar.mht.hypotheses import (
     LN_2PI,
@@ -156,12 +160,19 @@ class MhtTracker:
             self.hx, self.hP, self.hc, self.ht, self.hm, T, self.sojourn, tr.IN[self.ht] >= 0)
         self.hmeas = self.hmeas[src]
         Qm = np.stack([self.process_noise(T, q) for q in self.q_models])[self.hm]
-        q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta, t, own_x, own_y)[self.ht]  # issue 31
+        self.range_noise.cycle(t, own_x, own_y)  # issue 31: the contact's TMA solution
+        q_man = self.range_noise.q_theta(tr.uid, self.params.q_theta)[self.ht]
         raised = (self.hm == len(self.q_models) - 1) & (q_man > self.params.q_theta)
         if raised.any():
             Qm[raised] = self.process_noise(np.full(int(raised.sum()), T), q_man[raised])
         xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
+        k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
+            tr.uid[self.ht], self.hx[:, :2], self.hP[:, :2, :2], xp[:, :2], Pp[:, :2, :2], Qm[:, :2, :2])
+        xp, Pp = with_bearing(xp, Pp, k, m2, C2)
+        Fh = np.repeat(F[None], xp.shape[0], axis=0)  # per hypothesis, for the retrodiction:
+        Fh[k, :2, :] = 0.0  # a bearing block from the TMA solution does not depend on x(k-1)
+        by_tma = self.range_noise.solved(tr.uid)  # not deleted for its bearing sigma
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
         nT = tr.size
@@ -191,7 +202,7 @@ class MhtTracker:
         heads, cx, cP, cc = merge_apply(cx, cP, cc, head)
         ct, cpar, cmeas, cm = ct[heads], cpar[heads], cmeas[heads], cm[heads]
         self.hx, self.hP, self.hc, self.ht, self.hmeas, self.hm = cx, cP, cc, ct, cmeas, cm
-        x_pre, P_pre = xp[cpar], Pp[cpar]
+        x_pre, P_pre, F_pre = xp[cpar], Pp[cpar], Fh[cpar]
         cpar = src[cpar]  # the retrodiction's parents: the hypotheses of the previous cycle
 
         unused = np.ones(z.shape[0], dtype=bool)
@@ -203,6 +214,7 @@ class MhtTracker:
                               if zs.size else np.full((cmeas.size, 2), np.nan), zs[unused]])
         x_pre = np.concatenate([x_pre, self.hx[-n_new:] if n_new else x_pre[:0]])
         P_pre = np.concatenate([P_pre, self.hP[-n_new:] if n_new else P_pre[:0]])
+        F_pre = np.concatenate([F_pre, np.repeat(F[None], n_new, axis=0)])
         cpar = np.concatenate([cpar, np.full(n_new, -1, dtype=np.intp)])
 
         LR = track_sums(self.hc, self.ht, tr.size)  # 000 LR_i = sum_h c_ih
@@ -220,14 +232,16 @@ class MhtTracker:
         drop |= self._merge_tracks()  # 000 track merge
         _, xi, Pi = mixture_moments(self.hx, self.hP, self.hc, self.ht, tr.size)
         drop |= (tr.SA == 0) & (tr.no_b >= mp.n_delete)
-        drop |= np.sqrt(Pi[:, 0, 0]) > math.radians(mp.sigma_max_deg)
+        by_tma = np.r_[by_tma, np.zeros(drop.size - by_tma.size, bool)]  # tracks split or opened: none
+        sig = np.sqrt(Pi[:, 0, 0])  # a track with a fresh solution: up to tma_prediction's MAX_SIGMA
+        drop |= (sig > math.radians(mp.sigma_max_deg)) & ~(by_tma & (sig <= MAX_SIGMA))
         for u in tr.uid[drop & (tr.ever_confirmed)]:
             self.retro.retire(int(u))
         live_h = ~drop[self.ht]
         remap = np.cumsum(~drop) - 1
         self.hx, self.hP, self.hc = self.hx[live_h], self.hP[live_h], self.hc[live_h]
         self.ht, self.hmeas, self.hm = remap[self.ht[live_h]], self.hmeas[live_h], self.hm[live_h]
-        x_pre, P_pre, cpar, det = x_pre[live_h], P_pre[live_h], cpar[live_h], det[live_h]
+        x_pre, P_pre, F_pre, cpar, det = x_pre[live_h], P_pre[live_h], F_pre[live_h], cpar[live_h], det[live_h]
         tr.keep(~drop)
         det[tr.IN[self.ht] >= 0] = np.nan  # a resolution conflict's detections may be the other's
         xi, Pi = xi[~drop], Pi[~drop]
@@ -237,7 +251,7 @@ class MhtTracker:
                                 np.full(tr.size, own_x), np.full(tr.size, own_y),
                                 np.full((tr.size, 2), np.nan)])
         self.retro.push(CycleRecord(self.hx, self.hP, self.hc, self.ht, tr.uid.copy(), cpar,
-                                    x_pre, P_pre, F, rows, det))  # 000 retrodiction
+                                    x_pre, P_pre, F_pre, rows, det))  # 000 retrodiction
         self.retro.compact(tr.uid)
         self.range_noise.forget(tr.uid)
         self.n_hyp_max = max(self.n_hyp_max, int(np.bincount(self.ht).max(initial=0)))
