@@ -329,6 +329,17 @@ class CrossingManager:
             self._seen[rows] += n_meas
         return alpha, ambiguous
 
+    def proportions(self, ids: ArrayLike) -> np.ndarray:
+        """q^k (N,) of the tracks ids from the counts so far (q_prior for an unknown id)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        hits, seen = np.zeros(ids.size), np.zeros(ids.size)
+        if self._ids.size:
+            rows = np.minimum(np.searchsorted(self._ids, ids), self._ids.size - 1)
+            known = self._ids[rows] == ids
+            hits[known], seen[known] = self._hits[rows[known]], self._seen[rows[known]]
+        p = self.params
+        return proportions(hits, seen, p.q_prior, p.q_prior_weight, p.q_max)
+
     def forget(self, ids: ArrayLike) -> None:
         """Drop the state of deleted tracks (their numbers may be recycled)."""
         keep = ~np.isin(self._ids, np.asarray(ids, dtype=np.int64))

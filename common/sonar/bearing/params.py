@@ -56,6 +56,10 @@ class TrackerParams(Params):
     endfire_deg: floor of |sin(brg - heading)| in the linear-array sigma law.
     init_*_rate_sigma: P0 of the rates (brg rad/s, amp dB/s, freq Hz/s).
     crossing: run seed 004 crossing management ([sonar.crossing]) on confirmed tracks.
+    block_estimator: with crossing, 004's block estimator (eq. 6-10) fits the line of each
+        track flagged ambiguous to the crossing's detections, and the track resumes from
+        it when its flag clears (common.sonar.bearing.block; single-hypothesis mode).
+    block_window_s: seconds of the track's register before the flag rose that start its fit.
     band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
     ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
@@ -85,6 +89,8 @@ class TrackerParams(Params):
     init_amp_rate_sigma: float = 0.05
     init_freq_rate_sigma: float = 0.002
     crossing: bool = True
+    block_estimator: bool = False
+    block_window_s: float = 120.0
     band_hz: list[float] = field(default_factory=lambda: [10.0, 1000.0])
     ml_brg_tol_deg: float = 2.0
     ml_rate_tol_deg_s: float = 0.1
@@ -104,6 +110,7 @@ class TrackerParams(Params):
         "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
         "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
         "history_keep_deleted": count(0), "d_merge": non_negative("d^2"),
+        "block_window_s": non_negative("s"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
         two_values("imm_sojourn_s"), ascending_pair("band_hz"),
