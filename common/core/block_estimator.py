@@ -76,13 +76,24 @@ def density(d: np.ndarray, cov: np.ndarray) -> np.ndarray:
 def lines_separated(a: Line, b: Line, t0: float, t1: float, cov: np.ndarray, threshold: float,
                     angle_idx: Sequence[int] = ()) -> bool:
     """004 eq. 7 for two lines over [t0, t1]: min_t ||C_a(t) - C_b(t)||^2 > threshold, the
-    norm in the metric of g (cov (m, m)); the minimum of the quadratic in t, clipped to
-    the interval (the difference's angle components wrapped at t0)."""
-    d0 = residuals(a.at(np.array([t0])), np.array([t0]), b, angle_idx)[0]
-    dA = a.A - b.A
-    den = float(quadratic_form(dA, cov))
-    s = 0.0 if den <= 0.0 else float(np.clip(-(dA @ np.linalg.solve(cov, d0)) / den, 0.0, t1 - t0))
-    return float(quadratic_form(d0 + s * dA, cov)) > threshold  # 004 eq. 7
+    norm in the metric of g (cov (m, m)); `separated` for one line b."""
+    return bool(separated(a, b.A[None, :], b.at(np.array([t0])), t0, t1, cov, threshold, angle_idx)[0])
+
+
+def separated(a: Line, A: np.ndarray, C0: np.ndarray, t0: float, t1: float, cov: np.ndarray,
+              threshold: float, angle_idx: Sequence[int] = ()) -> np.ndarray:
+    """004 eq. 7 of line a against J lines of slopes A (J, m) and values C0 (J, m) at t0:
+    (J,) True where min over [t0, t1] of the squared distance in the metric of g exceeds
+    threshold; the minimum of each quadratic in t, clipped to the interval (the
+    differences' angle components wrapped at t0)."""
+    d0 = a.at(np.array([t0])) - C0
+    for i in angle_idx:
+        d0[:, i] = wrap_pi(d0[:, i])
+    dA = a.A[None, :] - A
+    den = quadratic_form(dA, cov)
+    cross = np.einsum("ji,ji->j", dA, np.linalg.solve(cov, d0.T).T)
+    s = np.clip(np.where(den > 0.0, -cross / np.where(den > 0.0, den, 1.0), 0.0), 0.0, t1 - t0)
+    return quadratic_form(d0 + s[:, None] * dA, cov) > threshold  # 004 eq. 7
 
 
 def weights(X: np.ndarray, t: np.ndarray, cov: np.ndarray, r: float, q: np.ndarray,
@@ -121,7 +132,7 @@ def _normal_equations(t: np.ndarray, t_ref: float, cov: np.ndarray, u: np.ndarra
 
 
 def maximise(X: np.ndarray, t: np.ndarray, cov: np.ndarray, w: np.ndarray, start: Line,
-             angle_idx: Sequence[int] = (), max_iter: int = 50, tol: float = 1e-9) -> tuple[Line, bool]:
+             angle_idx: Sequence[int] = (), max_iter: int = 50, tol: float = 1e-6) -> tuple[Line, bool]:
     """The local maximum of eq. 10 (eq. 8 with w = 1) reached from `start` (the previous
     block's line): fixed point of the weighted least squares with u_n = w_n g(res_n),
     each step an ascent step; returns (line, converged). Fewer points than 2m, or a

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from common.core.angles import wrap_pi
-from common.core.block_estimator import Line, line_covariance, lines_separated, maximise, share, weights
+from common.core.block_estimator import Line, line_covariance, maximise, separated, share, weights
 from common.core.crossing import CUTOFF_RADIUS
 
 GATE = 4.0  # points within 4 sigma (detection and line) of a track's line
@@ -82,13 +82,15 @@ class CrossingBlocks:
         return [Line(xk[1:2].copy(), xk[0:1].copy(), t) for xk in x]
 
     def _neighbours(self, k: int, lines: list[Line], conf: np.ndarray, x: np.ndarray,
-                    t0: float, t: float, var: float) -> list[int]:
+                    t0: float, t: float, var: float) -> np.ndarray:
         """Rows j != k of confirmed tracks whose lines eq. 7 does not separate from k's over
         [t0, t] (threshold CUTOFF_RADIUS^2 in the metric of the detection noise)."""
         near = np.flatnonzero(conf & (np.abs(wrap_pi(x[:, 0] - x[k, 0])) < NEAR))
-        cov = np.array([[var]])
-        return [j for j in near.tolist() if j != k and
-                not lines_separated(lines[k], lines[j], t0, t, cov, CUTOFF_RADIUS**2, [0])]
+        near = near[near != k]
+        # the lines of the tracks at t (x): their values at t0 by their rates
+        C0 = x[near, 0:1] - x[near, 1:2] * (t - t0)
+        sep = separated(lines[k], x[near, 1:2], C0, t0, t, np.array([[var]]), CUTOFF_RADIUS**2, [0])
+        return near[~sep]
 
     def step(self, t: float, uids: np.ndarray, conf: np.ndarray, flagged: np.ndarray,
              x: np.ndarray, P: np.ndarray, q: np.ndarray, z_brg: np.ndarray, z_var: np.ndarray,
@@ -145,7 +147,7 @@ class CrossingBlocks:
         t0 = e.t0 - self.window_s
         nb = self._neighbours(k, lines, conf, x, t0, t, float(np.median(var)))
         r = (1.0 - float(q[k])) / self.volume
-        w = weights(X[:, None], tt, var[:, None, None], r, q[nb], [lines[j] for j in nb], [0])
+        w = weights(X[:, None], tt, var[:, None, None], r, q[nb], [lines[j] for j in nb.tolist()], [0])
         e.t.append(tt)
         e.X.append(X)
         e.var.append(var)
