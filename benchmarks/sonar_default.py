@@ -9,7 +9,10 @@ Candidates (`CONFIGS`): association mode gnn / mht ([sonar.tracker] mode_associa
 000's erfc P_D law and level-based P_FA (clutter_level_db = the scene's false-detection
 level above the threshold, sim.sonar.clutter_snr_db, or 0: off; the multiple-hypothesis
 mode always runs its own erfc law, so it has one configuration); 004's block estimator
-(block_estimator, single-hypothesis mode only). Mode "auto" of [sonar.tracker] is the
+(block_estimator, single-hypothesis mode only); 004 claim 6's maximum ambiguity duration
+60 s or 600 s ([sonar.crossing] max_duration; single-hypothesis mode only; it applies
+where the scene file does not set it: the four sonar_x_* scenes and the close approach,
+the others set it). Mode "auto" of [sonar.tracker] is the
 broadband / narrowband choice, not an association mode: every scene here is broadband.
 003 claim 9's manoeuvre detector ([sonar.tma.ctma] detect_manoeuvres) runs in the TMA
 service after the tracker and feeds nothing back to it here, so it cannot change these
@@ -76,20 +79,23 @@ class Config:
     mode: str
     law: bool
     block: bool
+    duration: float = 60.0
 
 
 CONFIGS = (
-    Config("gnn", "gnn", False, False), Config("gnn+law", "gnn", True, False),
-    Config("gnn+block", "gnn", False, True), Config("gnn+law+block", "gnn", True, True),
-    Config("mht", "mht", False, False),
+    Config("gnn", "gnn", False, False), Config("mht", "mht", False, False),
+    Config("gnn+law", "gnn", True, False), Config("gnn+block", "gnn", False, True),
+    Config("gnn+law+block", "gnn", True, True),
+    Config("gnn/600", "gnn", False, False, 600.0), Config("gnn+law/600", "gnn", True, False, 600.0),
+    Config("gnn+block/600", "gnn", False, True, 600.0), Config("gnn+law+block/600", "gnn", True, True, 600.0),
 )
 
 
 def default_config() -> Config:
     """The configuration of the Params defaults."""
-    p = SonarTrackerParams()
+    p, d = SonarTrackerParams(), CrossingParams().max_duration
     return next(c for c in CONFIGS if c.mode == p.mode_association and c.block == p.block_estimator
-                and c.law == (p.clutter_level_db > 0))
+                and c.law == (p.clutter_level_db > 0) and (c.mode == "mht" or c.duration == d))
 
 
 def scene_doc(name: str) -> dict[str, Any]:
@@ -108,7 +114,10 @@ def build(doc: dict[str, Any], cfg: Config):
                 clutter_level_db=float(sim.get("clutter_snr_db", 2.0)) if cfg.law else 0.0)
     mp = replace(section(dep, "sonar.tracker.mht", MhtParams), rho_f=sim["clutter"] / (2 * math.pi * 10.0))
     arr = dep.arrays[0]
-    return bearing_tracker(p, mp, arr.kind, arr.sigma0, section(dep, "sonar.crossing", CrossingParams)), arr
+    cp = section(dep, "sonar.crossing", CrossingParams)
+    if "max_duration" not in doc.get("sonar", {}).get("crossing", {}):
+        cp = replace(cp, max_duration=cfg.duration)  # 004 claim 6 where the scene leaves it
+    return bearing_tracker(p, mp, arr.kind, arr.sigma0, cp), arr
 
 
 def run_one(job: tuple[str, int, Config]) -> tuple[str, str, int, tuple[int, int, int, int, float, int]]:
@@ -166,15 +175,18 @@ def main(argv: list[str] | None = None) -> int:
     configs = [c for c in CONFIGS if c.name in a.config]
     jobs = [(s, seed, c) for c in configs for s in a.scene
             for seed in range(1, (a.runs if s in MINE else a.other_runs) + 1)]
+    want = {(s, c.name): sum(1 for j in jobs if j[0] == s and j[2] == c) for c in configs for s in a.scene}
     res: dict[tuple[str, str], list] = {}
+    print(f"{'scene':<24}{'config':<15}{'runs':>5}{'unflagged':>10}{'breaks':>7}{'false/100':>10}{'RMSE':>7}",
+          flush=True)
     with ProcessPoolExecutor(a.workers) as ex:
-        for scene, cname, _seed, row in ex.map(run_one, jobs, chunksize=4):
-            res.setdefault((scene, cname), []).append(row)
-    print(f"{'scene':<24}{'config':<15}{'runs':>5}{'unflagged':>10}{'breaks':>7}{'false/100':>10}{'RMSE':>7}")
-    for s in a.scene:
-        for c in configs:
-            k = rank_key(res[(s, c.name)])
-            print(f"{s:<24}{c.name:<15}{len(res[(s, c.name)]):>5}{k[0]:>10}{k[1]:>7}{k[2]:>10.2f}{k[3]:>7.3f}")
+        for scene, cname, _seed, row in ex.map(run_one, jobs, chunksize=2):
+            rows = res.setdefault((scene, cname), [])
+            rows.append(row)
+            if len(rows) == want[(scene, cname)]:
+                k = rank_key(rows)
+                print(f"{scene:<24}{cname:<15}{len(rows):>5}{k[0]:>10}{k[1]:>7}{k[2]:>10.2f}{k[3]:>7.3f}",
+                      flush=True)
     table = sorted((rank_key([r for s in a.scene for r in res[(s, c.name)]]), c.name) for c in configs)
     print(f"\n{'rank':<5}{'config':<15}{'unflagged runs':>15}{'break runs':>11}{'false/100':>10}"
           f"{'RMSE':>7}{'ms @200':>9}")
