@@ -85,8 +85,8 @@ class CrossingParams(Params):
         default: with 60 s (the default before issue 31) the flag cleared while two
         contacts crossing at 2-3 deg/min were still unresolved, and the single-hypothesis
         tracker kept swaps unflagged in 12, 14 and 30 runs of 40 on sonar_x_clutter,
-        sonar_x_turn and sonar_x_three (0 with 600 s; benchmarks/sonar_default.py). The
-        radar tables set their own (10 s, 60 s).
+        sonar_x_turn and sonar_x_three (0, 0 and 6 with 600 s; benchmarks/sonar_default.py,
+        docs/decisions/023-sonar-defaults.md). The radar tables set their own (10 s, 60 s).
     q_prior, q_prior_weight: prior proportion and its weight in pseudo-counts for q.
     q_max: upper clip of q so that r = (1 - q) / c stays positive.
     """
