@@ -10,6 +10,7 @@ import numpy as np
 
 from common.core.angles import wrap_pi
 from common.core.crossing import CrossingParams
+from common.sonar.bearing.block import CrossingBlocks
 from common.sonar.bearing.tracker import BearingTracker, TrackerParams
 
 SIG = math.radians(1.0)
@@ -56,3 +57,16 @@ def test_off_keeps_no_episode() -> None:
     """Off (the default), the tracker has no block estimator."""
     for tr, _c, _t in run(False, 1):
         assert tr.blocks is None
+
+
+def test_an_episode_without_points_leaves_the_state() -> None:
+    """A flag that rises and clears with no register rows and no detection near the
+    track gives no line (the Kalman state stays), and no error."""
+    blocks = CrossingBlocks(2 * math.pi, 120.0)
+    x = np.array([[1.0, 0.0, 15.0, 0.0]])
+    P = np.eye(4)[None] * 1e-4
+    args = (np.array([5]), np.array([True]))
+    far = (np.array([2.0]), np.array([1e-4]))
+    assert blocks.step(0.0, *args, np.array([True]), x, P, np.array([0.5]), *far, {}) == []
+    assert blocks.step(5.0, *args, np.array([False]), x, P, np.array([0.5]), *far, {}) == []
+    assert blocks.episodes == {}

@@ -35,7 +35,7 @@ from common.core.angles import wrap_pi
 from common.core.block_estimator import Line, line_covariance, maximise, separated, share, weights
 from common.core.crossing import CUTOFF_RADIUS
 
-GATE = 4.0  # points within 4 sigma (detection and line) of a track's line
+GATE = 4.0  # points within 4 sigma (detection and prediction) of a track's prediction
 MIN_POINTS = 6
 NEAR = np.radians(20.0)  # neighbours farther in bearing than this are not tested by eq. 7
 
@@ -51,10 +51,10 @@ class Episode:
     w: list[np.ndarray] = field(default_factory=list)
 
     def points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(t, X (P, 1), cov (P, 1, 1), w) of every point so far."""
-        v = np.concatenate(self.var)
-        return (np.concatenate(self.t), np.concatenate(self.X)[:, None], v[:, None, None],
-                np.concatenate(self.w))
+        """(t, X (P, 1), cov (P, 1, 1), w) of every point so far (P may be 0)."""
+        v = np.concatenate([np.zeros(0), *self.var])
+        return (np.concatenate([np.zeros(0), *self.t]), np.concatenate([np.zeros(0), *self.X])[:, None],
+                v[:, None, None], np.concatenate([np.zeros(0), *self.w]))
 
 
 @dataclass(frozen=True)
