@@ -19,7 +19,7 @@ def test_the_default_configuration_is_the_ranked_candidate() -> None:
 def test_the_default_keeps_the_flag_up_through_a_three_contact_crossing() -> None:
     """sonar_x_three seed 3: with 004's maximum duration at 60 s the flag clears while the
     three contacts are unresolved and two tracks stay exchanged unflagged; with the
-    default configuration no swap outlives the flag (about 2 s)."""
+    default configuration no swap outlives the flag (under 1 s on an idle machine)."""
     gnn60 = next(c for c in CONFIGS if c.name == "gnn")
     assert run_one(("sonar_x_three", 3, gnn60))[3][0] >= 1
     assert run_one(("sonar_x_three", 3, default_config()))[3][0] == 0
