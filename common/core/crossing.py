@@ -81,7 +81,12 @@ class CrossingParams(Params):
     epsilon: coefficient of eq. 13 (0.1, the value given in seed 004).
     volume: c, the integral of the admissible measurement domain, in the units of
         z_pred (default 2 pi: a bearing-only tracker; set it for other spaces).
-    max_duration: maximum ambiguity duration in seconds (004 claim 6).
+    max_duration: maximum ambiguity duration in seconds (004 claim 6). 600 s, the sonar
+        default: with 60 s (the default before issue 31) the flag cleared while two
+        contacts crossing at 2-3 deg/min were still unresolved, and the single-hypothesis
+        tracker kept swaps unflagged in 12, 14 and 30 runs of 40 on sonar_x_clutter,
+        sonar_x_turn and sonar_x_three (0, 0 and 6 with 600 s; benchmarks/sonar_default.py,
+        docs/decisions/023-sonar-defaults.md). The radar tables set their own (10 s, 60 s).
     q_prior, q_prior_weight: prior proportion and its weight in pseudo-counts for q.
     q_max: upper clip of q so that r = (1 - q) / c stays positive.
     """
@@ -91,7 +96,7 @@ class CrossingParams(Params):
     S: float = 3.0
     epsilon: float = 0.1
     volume: float = 2.0 * np.pi
-    max_duration: float = 60.0
+    max_duration: float = 600.0
     q_prior: float = 0.5
     q_prior_weight: float = 2.0
     q_max: float = 0.95
@@ -328,6 +333,17 @@ class CrossingManager:
             self._hits[rows] += ~np.isnan(np.asarray(z_meas, dtype=float)).any(axis=1)
             self._seen[rows] += n_meas
         return alpha, ambiguous
+
+    def proportions(self, ids: ArrayLike) -> np.ndarray:
+        """q^k (N,) of the tracks ids from the counts so far (q_prior for an unknown id)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        hits, seen = np.zeros(ids.size), np.zeros(ids.size)
+        if self._ids.size:
+            rows = np.minimum(np.searchsorted(self._ids, ids), self._ids.size - 1)
+            known = self._ids[rows] == ids
+            hits[known], seen[known] = self._hits[rows[known]], self._seen[rows[known]]
+        p = self.params
+        return proportions(hits, seen, p.q_prior, p.q_prior_weight, p.q_max)
 
     def forget(self, ids: ArrayLike) -> None:
         """Drop the state of deleted tracks (their numbers may be recycled)."""

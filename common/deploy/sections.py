@@ -14,7 +14,7 @@ from common.core.params import Params
 from common.deploy.config import AuthConfig, Config, ConfigError, Site, TlsConfig, section, table, tables
 from common.deploy.structure import ARRAY, BASE, ORIGIN, ZENOH, Table
 from common.radar.elementary.tracker import ElementaryParams, RadarCrossingParams
-from common.radar.fusion.params import FusionParams
+from common.radar.fusion.params import FusionCrossingParams, FusionParams
 from common.radar.network.params import NetworkParams
 from common.radar.plots.channel_fusion import PlotterParams
 from common.radar.plots.units import IngestParams
@@ -27,7 +27,7 @@ SECTIONS: dict[str, type] = {
     "radar.tracker": ElementaryParams,
     "radar.crossing": RadarCrossingParams,
     "radar.fusion": FusionParams,
-    "radar.fusion_crossing": CrossingParams,
+    "radar.fusion_crossing": FusionCrossingParams,
     "radar.network": NetworkParams,
     "radar.ingest": IngestParams,
     "radar.ingest.*": IngestParams,

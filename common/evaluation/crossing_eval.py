@@ -14,6 +14,11 @@ Swap: at a cycle where the truth is resolved (every other truth farther than
 cycle while that previous track is still live. Cycles where the truths are closer
 than `resolved` are skipped: there the nearest track is decided by noise, not by the
 tracker. A number change after the previous track was deleted is not a swap (a break).
+Unflagged swap (issue 31): a swap whose new track keeps the truth for `unflagged_cycles`
+(2) resolved cycles in a row with its ambiguity flag down (a flagged cycle restarts the
+count; the truth leaving that track ends it), i.e. an exchange that outlives 004's flag,
+which consumers cannot tell from a good track; counted once per swap; a swap back onto
+the track the truth was swapped from undoes it.
 "Still live" is the track, not its number (`Numbers`): the single-hypothesis tracker
 reuses the number of a deleted track at once, often in the same cycle, for a new
 tentative track; a number reused so is not the live track, and a lost track replaced
@@ -61,6 +66,9 @@ class Frame:
                    np.asarray(ambiguous, dtype=bool).reshape(-1))
 
 
+Wrong = tuple[tuple[int, int], int, tuple[int, int]]  # (track now, clear cycles, track before)
+
+
 @dataclass(frozen=True)
 class EvalParams:
     """Scales (per component), thresholds in scaled units, and the lost rule."""
@@ -72,16 +80,19 @@ class EvalParams:
     far: float = 8.0
     lost_cycles: int = 3
     angle_idx: tuple[int, ...] = ()
+    unflagged_cycles: int = 2
 
 
 @dataclass(frozen=True)
 class RunScore:
-    """Swaps and lost truths of one run, and the flag counts (flagged, cycles)."""
+    """Swaps and lost truths of one run, the flag counts (flagged, cycles), and the
+    swaps that outlived the flag."""
 
     swaps: int
     lost: int
     flag_during: tuple[int, int]
     flag_outside: tuple[int, int]
+    unflagged_swaps: int = 0
 
 
 def scaled_distance(a: np.ndarray, b: np.ndarray, p: EvalParams) -> np.ndarray:
@@ -159,7 +170,8 @@ def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
     seen: set[int] = set()
     gap: dict[int, int] = {}
     lost: set[int] = set()
-    swaps = 0
+    swaps = unflagged = 0
+    wrong: dict[int, Wrong] = {}  # truth -> its swap not yet undone
     flags = np.zeros((2, 2), dtype=np.int64)  # rows during / outside: flagged, cycles
     for f in frames:
         tracks = associate(f, p)
@@ -182,9 +194,30 @@ def score_run(frames: Iterable[Frame], p: EvalParams) -> RunScore:
                 prev = last.get(truth)
                 if prev is not None and prev[0] != trk and numbers.live(prev):
                     swaps += 1
+                    cur = wrong.get(truth)
+                    if cur is not None and cur[2] == numbers.tag(trk):
+                        del wrong[truth]  # back on the track it was swapped from
+                    else:
+                        wrong[truth] = (numbers.tag(trk), 0, prev)
+                unflagged += _outlives_flag(wrong, truth, numbers.tag(trk), flagged[trk], p)
                 last[truth] = numbers.tag(trk)
     return RunScore(swaps, len(lost), (int(flags[0, 0]), int(flags[0, 1])),
-                    (int(flags[1, 0]), int(flags[1, 1])))
+                    (int(flags[1, 0]), int(flags[1, 1])), unflagged)
+
+
+def _outlives_flag(wrong: dict[int, Wrong], truth: int,
+                   track: tuple[int, int], flagged: bool, p: EvalParams) -> int:
+    """1 when the swap of `truth` reaches `unflagged_cycles` resolved cycles with the flag
+    of its new track down at this cycle, else 0; `wrong` updated in place."""
+    cur = wrong.get(truth)
+    if cur is None:
+        return 0
+    if cur[0] != track:
+        del wrong[truth]
+        return 0
+    n = 0 if flagged else cur[1] + 1
+    wrong[truth] = (track, n, cur[2])
+    return int(n == p.unflagged_cycles)
 
 
 @dataclass(frozen=True)
@@ -198,6 +231,7 @@ class Summary:
     lost_runs: int
     flag_during: float
     flag_outside: float
+    unflagged_swap_runs: int = 0
 
     @property
     def swap_rate(self) -> float:
@@ -216,4 +250,5 @@ def summarise(scores: Sequence[RunScore]) -> Summary:
         lost_runs=sum(s.lost > 0 for s in scores),
         flag_during=float(fd[0] / fd[1]) if fd[1] else float("nan"),
         flag_outside=float(fo[0] / fo[1]) if fo[1] else float("nan"),
+        unflagged_swap_runs=sum(s.unflagged_swaps > 0 for s in scores),
     )

@@ -18,11 +18,10 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from common.core.crossing import CrossingParams
 from common.deploy.config import Config, section
 from common.radar.elementary.model import model_of
 from common.radar.elementary.tracker import ElementaryParams, ElementaryTracker, RadarCrossingParams
-from common.radar.fusion.params import FusionParams
+from common.radar.fusion.params import FusionCrossingParams, FusionParams
 from common.radar.fusion_core import FusionCore, fusion_core
 from common.radar.network.params import NetworkParams
 from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
@@ -35,7 +34,7 @@ def global_fusion(cfg: Config) -> FusionCore:
     [radar.network] (a network's fusion centre) and [radar.tracker] (for the
     decorrelation). Raises ValueError if the bases cannot be
     fused."""
-    crossing = (section(cfg, "radar.fusion_crossing", CrossingParams)
+    crossing = (section(cfg, "radar.fusion_crossing", FusionCrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     return fusion_core(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
                        section(cfg, "radar.tracker", ElementaryParams),

@@ -143,3 +143,38 @@ def test_summarise() -> None:
     assert math.isclose(s.swap_rate, 1 / 3)
     assert math.isclose(s.flag_during, 0.5) and math.isclose(s.flag_outside, 0.05)
     assert math.isnan(summarise([]).swap_rate)
+
+
+def _flagged(frames: list[Frame], until: float) -> list[Frame]:
+    """The same frames with every track flagged ambiguous up to time `until`."""
+    return [Frame(f.t, f.truth_ids, f.truth, f.track_ids, f.tracks, f.confirmed,
+                  np.full(f.track_ids.size, f.t <= until)) for f in frames]
+
+
+def test_an_exchange_that_outlives_the_flag_is_an_unflagged_swap() -> None:
+    """The exchanged crossing: each truth's new track keeps it unflagged from step 14 on
+    (the first resolved cycle), so both swaps are unflagged; flagged to step 19, one
+    clear cycle (step 20) is not enough; flagged to 18, two clear cycles are."""
+    swapped = crossing({7: 2, 8: 1})
+    s = score_run(swapped, P)
+    assert (s.swaps, s.unflagged_swaps) == (2, 2)
+    assert score_run(_flagged(swapped, 19.0), P).unflagged_swaps == 0
+    assert score_run(_flagged(swapped, 18.0), P).unflagged_swaps == 2
+    kept = score_run(_flagged(crossing({7: 1, 8: 2}), 12.0), P)
+    assert (kept.swaps, kept.unflagged_swaps) == (0, 0)
+
+
+def test_a_swap_undone_before_two_clear_cycles_is_not_unflagged() -> None:
+    """Out at step 15 and back at step 16 (both resolved, unflagged): four swaps, the
+    first two lasting one cycle, the last two undoing them: none unflagged."""
+    frames = crossing({7: 1, 8: 2})
+    frames[15] = frame(15.0, [5.0, -5.0], {7: -5.0, 8: 5.0})
+    s = score_run(frames, P)
+    assert (s.swaps, s.unflagged_swaps) == (4, 0)
+    frames[16] = frame(16.0, [6.0, -6.0], {7: -6.0, 8: 6.0})  # two cycles out: unflagged
+    assert score_run(frames, P).unflagged_swaps == 2
+
+
+def test_summary_counts_unflagged_swap_runs() -> None:
+    scores = [RunScore(2, 0, (0, 0), (0, 0), 1), RunScore(2, 0, (0, 0), (0, 0), 0)]
+    assert summarise(scores).unflagged_swap_runs == 1

@@ -132,7 +132,7 @@ class RadarCrossingParams(CrossingParams):
     enabled: run seed 004 crossing management on confirmed and coasting tracks.
 
     Radar defaults: volume is the (r_b, theta) domain 200 km x 2 pi (instead of 2 pi);
-    max_duration is 10 s (instead of 60 s): in memory mode a track is extrapolated
+    max_duration is 10 s (instead of 600 s): in memory mode a track is extrapolated
     while ambiguous, and on the crossing scenario extrapolations longer than about ten
     1 s scans left the gate and lost the track.
     """

@@ -86,7 +86,7 @@ from common.radar.fusion.assoc import (
 from common.radar.fusion.decorrelation import Decorrelator
 from common.radar.fusion.initiation import InitParams, altitude_bands, azimuth_pairs, pair_candidates, select
 from common.radar.fusion.merge import merge_tracks
-from common.radar.fusion.params import FusionParams
+from common.radar.fusion.params import FusionCrossingParams, FusionParams
 from common.radar.fusion.reopen import reopen
 from common.radar.fusion.report import GlobalTracks, etrack_set
 from common.radar.fusion.segments import segment_pairs
@@ -134,7 +134,7 @@ class GlobalFusion:
                                           "located": ((), bool), "ambiguous": ((), bool),
                                           "suspect": ((), bool), "mu": ((K,), float),
                                           "xm": ((K, 6), float), "Pm": ((K, 6, 6), float)})
-        self.crossing = CrossingManager(crossing or CrossingParams(method="supnorm"))
+        self.crossing = CrossingManager(crossing or FusionCrossingParams(method="supnorm"))
         self.succession = Succession(self.p.max_coast)  # common.radar.fusion.succession
         self.gamma_max = chi2_gate(self.p.gate_prob, 3)
         self.swap_gate = chi2_gate(self.p.gate_prob, 1)  # fusion.assoc.ambiguous_members

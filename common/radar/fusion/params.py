@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
+from common.core.crossing import CrossingParams
 from common.core.params import PROB_OPEN, Range, count, non_negative, positive
 from common.radar.fusion.initiation import InitParams
 
@@ -100,3 +101,16 @@ class FusionParams(InitParams):
         "max_lead": positive("s"),
         "eq_gate_prob": PROB_OPEN, "segment_accel": non_negative("m/s^2"),
     }
+
+
+@dataclass(frozen=True)
+class FusionCrossingParams(CrossingParams):
+    """[radar.fusion_crossing] seed 004 crossing management of the global tracks.
+
+    The fields of CrossingParams; without the table, global fusion runs the sup-norm test.
+
+    Radar default: max_duration is 60 s (the sonar's is 600 s: a bearing crossing lasts
+    minutes, a global track is extrapolated in 1 s cycles).
+    """
+
+    max_duration: float = 60.0

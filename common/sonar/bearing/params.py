@@ -46,16 +46,31 @@ class TrackerParams(Params):
     clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
         its predicted amplitude (000 erfc law) and P_FA of a detection from its level
         (bearing.model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
-        Off by default: on the tuned 4 deg/min unequal-speed crossing
-        (sonar_cross_4dpm_uneq, 50 runs through the processes) the law at 2 dB gave 4
-        swap runs with crossing management (0 without it) and 15 without (4); the
-        scenes written for clutter (sonar_hold*) set it.
+        Off by default (benchmarks/sonar_default.py over 17 sonar scenes, 40 seeds on
+        the four sonar_x_* scenes, 10 on the others; docs/decisions/023-sonar-defaults.md):
+        on, at the scene's clutter level, it ranks below off on the first criterion,
+        runs with an unflagged swap 10 against 6 (sonar_x_three; 0 for both on the 16
+        other scenes), though with fewer break runs (9 against 14: sonar_x_amp 0 / 2,
+        sonar_x_three 9 / 12) and fewer false tracks (sonar_x_clutter 0.36 against 0.60
+        per 100 cycles). Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes)
+        the law at 2 dB gave 4 swap runs with crossing management (0 without it); the hold
+        scenes (sonar_hold*) set it.
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
     alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
     delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
     endfire_deg: floor of |sin(brg - heading)| in the linear-array sigma law.
     init_*_rate_sigma: P0 of the rates (brg rad/s, amp dB/s, freq Hz/s).
     crossing: run seed 004 crossing management ([sonar.crossing]) on confirmed tracks.
+    block_estimator: with crossing, 004's block estimator (eq. 6-10) fits the line of each
+        track flagged ambiguous to the crossing's detections, and the track resumes from
+        it when its flag clears (common.sonar.bearing.block; single-hypothesis mode).
+        Off by default (benchmarks/sonar_default.py, docs/decisions/023-sonar-defaults.md):
+        on, runs with an unflagged swap 9 against 6 over the 17 scenes (sonar_x_amp 2
+        against 0, sonar_hold_cross_slow 1 against 0, sonar_x_three 6 and 6), break runs
+        15 against 14, a larger bearing RMSE on every one of the 17 scenes (sonar_x_amp 0.50
+        against 0.45 deg, sonar_hold_cross_turn 0.44 against 0.41, sonar_cross_2dpm_uneq
+        0.57 against 0.53), and a slower cycle at 200 contacts.
+    block_window_s: seconds of the track's register before the flag rose that start its fit.
     band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
     ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
@@ -85,6 +100,8 @@ class TrackerParams(Params):
     init_amp_rate_sigma: float = 0.05
     init_freq_rate_sigma: float = 0.002
     crossing: bool = True
+    block_estimator: bool = False
+    block_window_s: float = 120.0
     band_hz: list[float] = field(default_factory=lambda: [10.0, 1000.0])
     ml_brg_tol_deg: float = 2.0
     ml_rate_tol_deg_s: float = 0.1
@@ -104,6 +121,7 @@ class TrackerParams(Params):
         "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
         "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
         "history_keep_deleted": count(0), "d_merge": non_negative("d^2"),
+        "block_window_s": non_negative("s"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
         two_values("imm_sojourn_s"), ascending_pair("band_hz"),

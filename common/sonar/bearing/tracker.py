@@ -17,6 +17,9 @@ time only:
      bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
+     5b. with `block_estimator`, a track whose 004 flag clears resumes from the line 004's
+     block estimator (eq. 6-10) fitted to the crossing's detections
+     (common.sonar.bearing.block);
   6. track quality L(k) = L(k-1) + dL (000 claim 4, with those P_D, P_FA), ln(1 - P_D)
      for a miss; tentative above T2 -> confirmed, below T1 -> deleted (000 claim 2);
      confirmed deleted when L falls `delete_drop` below its maximum (000 Fig. 3, t_3);
@@ -44,6 +47,7 @@ from common.core.crossing import CrossingParams
 from common.core.kalman import diagonal_covariances, predict, update
 from common.core.track_table import Status, TrackTable
 from common.sonar.bearing.assoc import associate
+from common.sonar.bearing.block import CrossingBlocks
 from common.sonar.bearing.crossing import BearingCrossing
 from common.sonar.bearing.history import BearingHistory
 from common.sonar.bearing.imm import BearingImm
@@ -112,6 +116,8 @@ class BearingTracker:
         self.crossing = (BearingCrossing(crossing or CrossingParams(), self.H,
                                          p.band_hz if self.narrowband else None)
                          if p.crossing else None)
+        self.blocks = (CrossingBlocks(self.crossing.manager.params.volume, p.block_window_s)
+                       if self.crossing is not None and p.block_estimator else None)
         self.multiline = (MultiLineGrouper(math.radians(p.ml_brg_tol_deg), math.radians(p.ml_rate_tol_deg_s))
                           if self.narrowband else None)
         self.history = BearingHistory(p.history_keep_deleted)
@@ -208,6 +214,8 @@ class BearingTracker:
 
         if frozen.size:  # the frozen pairs' centroids (common.sonar.bearing.pairs)
             x, P = self._centroids(idx, frozen, x, P, rows, z[cols_, 0], Rd[cols_, 0])
+        if self.blocks is not None:  # 004 eq. 6-10 (common.sonar.bearing.block)
+            self._block_exits(t, idx, conf, ambiguous, x, P, z[:, 0], Rd[:, 0])
         dL = missed_increment(p_d)
         dL[rows] = quality_increment(p_d[rows], p_fa[cols_], self.beam, detS, d2, self.m)  # 000 claim 4
         L = tab.score[idx] + dL  # 000 L(k) = L(k-1) + dL
@@ -252,6 +260,22 @@ class BearingTracker:
             return xm[:, 0], Pm[:, 0]
         tab.xm[idx], tab.Pm[idx] = xm, Pm
         return self.imm.combined(tab.mu[idx], xm, Pm)
+
+    def _block_exits(self, t: float, idx: np.ndarray, conf: np.ndarray, flagged: np.ndarray,
+                     x: np.ndarray, P: np.ndarray, z_brg: np.ndarray, z_var: np.ndarray) -> None:
+        """Step 5b in place on x, P (N, ...) and the IMM models: tracks leaving 004's
+        ambiguity take the bearing and rate of their block line."""
+        tab = self.table
+        uids = tab.uid[idx]
+        rising = conf & flagged & ~tab.ambiguous[idx]
+        hist = {int(u): tuple(self.history.rows(int(u))[c] for c in ("t", "brg", "sbrg")) for u in uids[rising]}
+        q = self.crossing.manager.proportions(tab.id[idx]) if self.crossing is not None else np.zeros(idx.size)
+        for ex in self.blocks.step(t, uids, conf, flagged, x, P, q, z_brg, z_var, hist):
+            k = int(np.flatnonzero(uids == ex.uid)[0])
+            s = slice(0, 2)
+            for xs, Ps in ((x[k], P[k]), *zip(tab.xm[idx[k]], tab.Pm[idx[k]])):
+                xs[0], xs[1] = wrap_2pi(ex.brg), ex.rate
+                Ps[s, 2:], Ps[2:, s], Ps[s, s] = 0.0, 0.0, ex.cov
 
     def _delete(self, slots: np.ndarray) -> None:
         """Delete tracks; confirmed ones keep their history under their number."""
