@@ -27,26 +27,30 @@ import argparse
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2
 
-from benchmarks.network_scene import scene_doc
-from common.core.gating import quadratic_form
-from common.core.track_table import Status
-from common.deploy.config import Config, parse
-from common.evaluation.pcrlb import channel_information, pcrlb
-from common.radar.fusion.report import GlobalTracks
-from common.radar.geometry.bistatic import POS
-from common.radar.network.params import NetworkParams
-from common.sim.radar import detection_probability
-from common.sim.radar_scenario import PD_MODELS, RadarSim
-from common.sim.scenario import load_scenario
-from common.wire.radar_chain import RadarChain
-from common.wire.radar_messages import plots_of
-from common.wire.sim_messages import run_scenario, truth_state
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from benchmarks.network_scene import scene_doc  # noqa: E402
+from common.core.gating import quadratic_form  # noqa: E402
+from common.core.track_table import Status  # noqa: E402
+from common.deploy.config import Config, parse  # noqa: E402
+from common.evaluation.pcrlb import channel_information, pcrlb  # noqa: E402
+from common.radar.fusion.report import GlobalTracks  # noqa: E402
+from common.radar.geometry.bistatic import POS  # noqa: E402
+from common.radar.network.params import NetworkParams  # noqa: E402
+from common.sim.radar import detection_probability  # noqa: E402
+from common.sim.radar_scenario import PD_MODELS, RadarSim  # noqa: E402
+from common.sim.scenario import load_scenario  # noqa: E402
+from common.wire.radar_chain import RadarChain  # noqa: E402
+from common.wire.radar_messages import plots_of  # noqa: E402
+from common.wire.sim_messages import run_scenario, truth_state  # noqa: E402
 
 NEAR = 2000.0  # m: pairing gate of an aircraft and a confirmed track
 P0 = np.diag([1e8, 1e4, 1e8, 1e4, 1e8, 1e4])  # prior of the PCRLB (m^2, m^2/s^2)
