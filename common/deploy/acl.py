@@ -111,9 +111,12 @@ def grants(cfg: Config) -> dict[str, Grant]:
     """Every identity of the deployment and what it may do (routers excluded)."""
     g: dict[str, Grant] = {}
     for s in cfg.sites:
-        g[site_identity(s.id)] = Grant(
+        g[site_identity(s.id)] = Grant(  # its feeds: `pfusion ingest blah2 --base B` per base
             publish=[f"radar/plots/{b}/*" for b in s.bases]
-            + [f"sonar/detections/{a}" for a in s.arrays])
+            + [f"sonar/detections/{a}" for a in s.arrays]
+            + [f"metrics/ingest/{b}" for b in s.bases],
+            tokens=[f"alive/ingest/{b}" for b in s.bases],
+            serve=[f"control/ingest/{b}" for b in s.bases])
     for b in cfg.bases:
         g[f"channel-plotter-{b.id}"] = _service("channel-plotter", b.id, [f"radar/fused/{b.id}"],
                                                 [f"radar/plots/{b.id}/*"])

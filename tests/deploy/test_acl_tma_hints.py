@@ -15,3 +15,4 @@ def test_the_tracker_identity_may_read_its_arrays_tma_solutions() -> None:
     g = grants(load(COARSE))["bearing-tracker-a1"]
     assert sorted(g.subscribe) == ["sonar/detections/a1", "sonar/tma/a1"]
     assert "sonar/tma/a1" not in g.publish
+
