@@ -194,14 +194,17 @@ function grid(ctx, canvas, xf) {
   const txt = (v) => `${+(v / u).toPrecision(6)} ${unit}`;
   canvas.graticule = null;
   const x0 = Math.ceil(xf.wx(0) / step) * step, y0 = Math.ceil(xf.wy(canvas.height) / step) * step;
+  const lines = new Path2D(), texts = [];  // the lines in one path, then their labels
   for (let i = 0, v = x0; i < MAX_GRID && v < xf.wx(canvas.width); i++, v = x0 + i * step) {
-    ctx.beginPath(); ctx.moveTo(xf.x(v), 0); ctx.lineTo(xf.x(v), canvas.height); ctx.stroke();
-    label(ctx, canvas, txt(v), xf.x(v) + 2, canvas.height - 4);
+    lines.moveTo(xf.x(v), 0); lines.lineTo(xf.x(v), canvas.height);
+    texts.push([txt(v), xf.x(v) + 2, canvas.height - 4]);
   }
   for (let i = 0, v = y0; i < MAX_GRID && v < xf.wy(0); i++, v = y0 + i * step) {
-    ctx.beginPath(); ctx.moveTo(0, xf.y(v)); ctx.lineTo(canvas.width, xf.y(v)); ctx.stroke();
-    label(ctx, canvas, txt(v), 2, xf.y(v) - 2);
+    lines.moveTo(0, xf.y(v)); lines.lineTo(canvas.width, xf.y(v));
+    texts.push([txt(v), 2, xf.y(v) - 2]);
   }
+  ctx.stroke(lines);
+  texts.forEach(([t, x, y]) => label(ctx, canvas, t, x, y));
 }
 
 function scaleBar(ctx, canvas, xf) {
@@ -236,13 +239,20 @@ function ellipses(ctx, xf, items) {  // items: [x, y, ell] in the current stroke
   ctx.stroke(); ctx.setLineDash([]);
 }
 
-function linePath(ctx, xf, pts) {  // adds the polyline of pts, broken at non-finite points
-  let on = false;
-  pts.forEach((p) => {
-    if (!fin(p[0]) || !fin(p[1])) { on = false; return; }
-    on ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]));
-    on = true;
-  });
+// Adds the polyline of pts, broken at non-finite points; a point within a pixel of the
+// last one drawn is skipped unless it ends the line (a trail or an arc at the plan's
+// scale is mostly such points: the path, and its rasterising, stays short).
+function linePath(ctx, xf, pts) {
+  let on = false, lx = 0, ly = 0;
+  for (let i = 0; i < pts.length; i++) {
+    const p = pts[i];
+    if (!fin(p[0]) || !fin(p[1])) { on = false; continue; }
+    const x = xf.x(p[0]), y = xf.y(p[1]);
+    if (!on) { ctx.moveTo(x, y); on = true; lx = x; ly = y; continue; }
+    const end = i === pts.length - 1 || !fin(pts[i + 1][0]) || !fin(pts[i + 1][1]);
+    if (!end && Math.abs(x - lx) < 1 && Math.abs(y - ly) < 1) continue;
+    ctx.lineTo(x, y); lx = x; ly = y;
+  }
 }
 
 function polyline(ctx, xf, pts) { ctx.beginPath(); linePath(ctx, xf, pts); ctx.stroke(); }
@@ -258,8 +268,19 @@ function followed(canvas, tracks) {
   return null;
 }
 
+// True when a canvas was last drawn from the same inputs (compared by identity: a
+// topic's state is a new object whenever it changes); records them otherwise.
+function unchanged(canvas, inputs) {
+  const was = canvas.inputs;
+  canvas.inputs = inputs;
+  return !!was && was.length === inputs.length && was.every((v, i) => v === inputs[i]);
+}
+
 function drawPlan(geo, g) {
   const canvas = $("plan"), ctx = canvas.getContext("2d"), n = nav(canvas);
+  const arcs = geo.bases.map((b) => topics[`etracks/${b.id}`]);
+  if (unchanged(canvas, [geo, g, topics.truth_radar, ...arcs, ...["trails", "ellipses", "arcs", "truth"].map(layer),
+    selected, unit, n.auto, n.cx, n.cy, n.s, n.follow])) return;
   const anchors = geo.bases.flatMap((b) => [b.tx, b.rx]);
   const now = robustBox(anchors, g.tracks.map((k) => [k.x[0], k.x[2]]), FLOOR_M.plan);
   const box = n.box ? n.box.slice() : [Infinity, -Infinity, Infinity, -Infinity];
@@ -294,17 +315,23 @@ function drawPlan(geo, g) {
   const truth = topics.truth_radar;
   if (layer("truth") && truth) {
     ctx.strokeStyle = PALETTE.truth; ctx.lineWidth = 1.5;
-    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 5));
+    crosses(ctx, xf, truth, 5);
   }
   drawTracks(ctx, xf, g.tracks);
   scaleBar(ctx, canvas, xf);
   $("plan-scale").textContent = canvas.dataset.scale;
 }
 
-function cross(ctx, px, py, r) {
-  if (!fin(px) || !fin(py)) return;
-  ctx.beginPath(); ctx.moveTo(px - r, py - r); ctx.lineTo(px + r, py + r);
-  ctx.moveTo(px - r, py + r); ctx.lineTo(px + r, py - r); ctx.stroke();
+function crosses(ctx, xf, truth, r) {  // truth {x: [], y: []} as crosses, one path
+  const W = ctx.canvas.width, H = ctx.canvas.height;
+  ctx.beginPath();
+  truth.x.forEach((x, i) => {
+    const px = xf.x(x), py = xf.y(truth.y[i]);
+    if (!fin(px) || !fin(py) || px < -r || px > W + r || py < -r || py > H + r) return;
+    ctx.moveTo(px - r, py - r); ctx.lineTo(px + r, py + r);
+    ctx.moveTo(px - r, py + r); ctx.lineTo(px + r, py - r);
+  });
+  ctx.stroke();
 }
 
 // Tracks drawn in one path per status colour and layer (10^4 tracks: one stroke each
@@ -386,8 +413,14 @@ $("units").addEventListener("change", (ev) => { unit = ev.target.value; render()
 
 // A label kept inside its canvas (shifted left or down when it would be cut at an edge);
 // every label drawn this frame is listed in canvas.labels ([text, x, y, width]).
+const widths = new Map();  // font and text -> measured width (px): 10^3 labels a frame
 function label(ctx, canvas, text, x, y) {
-  const w = ctx.measureText(text).width, h = 11;
+  const key = ctx.font + "|" + text, h = 11;
+  let w = widths.get(key);
+  if (w === undefined) {
+    if (widths.size > 50000) widths.clear();
+    widths.set(key, (w = ctx.measureText(text).width));
+  }
   const lx = Math.min(Math.max(x, 2), canvas.width - w - 2), ly = Math.min(Math.max(y, h + 1), canvas.height - 3);
   ctx.fillText(text, lx, ly);
   (canvas.labels = canvas.labels || []).push([text, lx, ly, w]);
