@@ -200,6 +200,18 @@ def test_waterfall_axis_tma_legend_labels_inside_and_palette_for_colour_deficien
         assert [t for t, _ in ticks] == [f"0:{s:02d}" for s in range(0, 41, 5)], ticks  # message time
         ys = [y for _, y in ticks]
         assert ys == sorted(ys, reverse=True), ticks  # later times higher up
+        # detections drawn from the page's pixel layer: each 2 x 2 px where the axes place it
+        dots = browser.execute_script(
+            "const c = document.querySelector('#array-a1 .waterfall'), ctx = c.getContext('2d'), a = c.axis;"
+            "const W = c.width - 50, H = c.height - 26, px = (x, y) => Array.from(ctx.getImageData(x, y, 1, 1).data);"
+            "return topics['waterfall/a1'].rows.flatMap(([t, bs]) => bs.map((b) => {"
+            "  const x = Math.round(50 + b / 360 * W), y = Math.round((a.t1 - t) / (a.t1 - a.t0) * H);"
+            "  return [b, t, px(x - 1, Math.max(y - 1, 0)), px(x, y), px(x + 3, y + 3)]; }))")
+        assert len(dots) == 6, dots
+        for b, t, inside, corner, beside in dots:
+            if abs(b - 143.2) < 1 and t == 20.0:  # the detection no bearing track crosses
+                assert inside == corner == [0xcf, 0xd8, 0xdc, 255] and beside != inside, (b, t, inside, corner, beside)
+        assert sum(abs(b - 143.2) < 1 and t == 20.0 for b, t, *_ in dots) == 1, dots
         legend = browser.find_element(By.CSS_SELECTOR, "#array-a1 .tma-legend").text
         for item in ("own ship", "TMA", "constrained TMA", "truth", "range unobservable"):
             assert item in legend, legend
