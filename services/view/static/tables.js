@@ -68,8 +68,11 @@ function fillTable(which, body, rows, more, onClick) {
   });
 }
 
+const sortBy = (which) => [sorts[which].key, sorts[which].dir, sorts[which].filter, unit, vunit];
+
 function trackTable(tracks) {
   remember(topics.gtracks || { t: null, tracks: [] });
+  if (unchanged($("tracks"), [tracks, selected, ...sortBy("g")])) return;
   const rows = tracks.map((k) => {
     const sp = speed(k.x[1], k.x[3]), co = course(k.x[1], k.x[3]), bases = k.et.map((t) => t[0]);
     return {
@@ -134,6 +137,8 @@ function sonarRows() {
 }
 
 function sonarTable() {
+  const from = Object.keys(topics).filter((n) => n.startsWith("waterfall/") || n.startsWith("tma/")).sort();
+  if (unchanged($("sonar-tracks"), [...from, ...from.map((n) => topics[n]), selectedSonar, ...sortBy("s")])) return;
   fillTable("s", $("sonar-tracks"), arrange("s", sonarRows()), $("sonar-more"), selectSonar);
   $("sonar-unit-head").textContent = unit;
   $("sonar-speed-head").textContent = vunit;

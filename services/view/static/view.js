@@ -268,11 +268,11 @@ function followed(canvas, tracks) {
   return null;
 }
 
-// True when a canvas was last drawn from the same inputs (compared by identity: a
-// topic's state is a new object whenever it changes); records them otherwise.
-function unchanged(canvas, inputs) {
-  const was = canvas.inputs;
-  canvas.inputs = inputs;
+// True when a canvas (or table) was last drawn from the same inputs, compared by
+// identity (a topic's state is a new object whenever it changes); records them otherwise.
+function unchanged(el, inputs) {
+  const was = el.inputs;
+  el.inputs = inputs;
   return !!was && was.length === inputs.length && was.every((v, i) => v === inputs[i]);
 }
 
