@@ -88,8 +88,8 @@ return out;
 """
 
 # Where a frame's time goes, on the live state: parse and record (median of 5), and the
-# draw split by the page's functions (each wrapped, mean ms over 5 renders, each a full
-# draw: the canvases and tables forget what they last drew, as when every topic changed).
+# draw split by the page's functions (each wrapped, mean ms over 5 renders; render()
+# without argument draws every panel, as when every topic changed).
 BREAKDOWN_JS = """
 const text = JSON.stringify({ topics: timeline.live() }), out = { kB: text.length / 1e3 };
 const median = (f) => { const ms = []; for (let i = 0; i < 5; i++) { const t = performance.now(); f();
@@ -104,9 +104,7 @@ fns.forEach((f) => { acc[f] = 0; window[f] = function (...a) {
   const t = performance.now();
   try { return orig[f].apply(this, a); } finally { acc[f] += performance.now() - t; } }; });
 let total = 0;
-const forget = () => document.querySelectorAll('canvas, tbody').forEach((c) => {
-  c.inputs = null; c.shown = null; if (c.dots) c.dots.w = null; });
-for (let i = 0; i < 5; i++) { forget(); const t = performance.now(); render(); total += performance.now() - t; }
+for (let i = 0; i < 5; i++) { const t = performance.now(); render(); total += performance.now() - t; }
 fns.forEach((f) => { window[f] = orig[f]; out[f] = acc[f] / 5; });
 out.render = total / 5;
 return out;

@@ -80,12 +80,13 @@ function linePath(ctx, xf, pts) {
 
 function polyline(ctx, xf, pts) { ctx.beginPath(); linePath(ctx, xf, pts); ctx.stroke(); }
 
-// True when a canvas (or table) was last drawn from the same inputs, compared by
-// identity (a topic's state is a new object whenever it changes); records them otherwise.
+// True when a canvas (or table) may keep what it shows: the frame allows it (`reuse`, see
+// render) and it was last drawn from the same inputs, compared by identity (a topic's
+// state is a new object whenever it changes). Records the inputs.
 function unchanged(el, inputs) {
   const was = el.inputs;
   el.inputs = inputs;
-  return !!was && was.length === inputs.length && was.every((v, i) => v === inputs[i]);
+  return reuse && !!was && was.length === inputs.length && was.every((v, i) => v === inputs[i]);
 }
 
 function crosses(ctx, xf, truth, r) {  // truth {x: [], y: []} as crosses, one path

@@ -49,12 +49,11 @@ function timeTicks(t0, t1) {
 const mss = (t) => `${Math.floor(t / 60)}:${String(Math.round(t % 60)).padStart(2, "0")}`;
 
 // The detections of a waterfall as pixels (2 x 2 each, #cfd8dc) in one buffer, put on an
-// offscreen canvas once per waterfall state and blitted by every frame that shows it
-// (24,000 fillRect calls a frame otherwise). Little-endian RGBA words, as every browser.
+// offscreen canvas and blitted (24,000 fillRect calls a frame otherwise). Little-endian
+// RGBA words, as every browser's.
 const DOT = 0xffdcd8cf;
 function dotLayer(canvas, w, X, Y, W, H) {
-  const c = canvas.dots || (canvas.dots = { el: document.createElement("canvas"), w: null, img: null });
-  if (c.w === w) return c.el;
+  const c = canvas.dots || (canvas.dots = { el: document.createElement("canvas"), img: null });
   if (c.el.width !== W || c.el.height !== H) { c.el.width = W; c.el.height = H; c.img = null; }
   c.img = c.img || new ImageData(W, H);
   const px = new Uint32Array(c.img.data.buffer);
@@ -71,14 +70,11 @@ function dotLayer(canvas, w, X, Y, W, H) {
     }
   }
   c.el.getContext("2d").putImageData(c.img, 0, 0);
-  c.w = w;
   return c.el;
 }
 
-// Drawn only when its state changed (a redraw for navigation leaves it as it is).
 function waterfall(canvas, w) {
-  if (canvas.shown === w) return;
-  canvas.shown = w;
+  if (unchanged(canvas, [w])) return;
   const ctx = canvas.getContext("2d"), W = canvas.width - AXIS_L, H = canvas.height - AXIS_B;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   canvas.labels = [];

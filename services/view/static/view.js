@@ -45,7 +45,7 @@ function connect() {
       timeline.take(m.topics);  // timeline.js: recorded, and shown unless paused
       Object.entries(m.ages || {}).forEach(([n, a]) => { got[n] = now - a; });
       if (m.limits) limits = m.limits;
-      render();
+      render(true);
     } finally {
       ws.send("ack");  // the server sends the next message only after this one is drawn
       timeline.frameDone(performance.now() - t0);
@@ -83,7 +83,11 @@ function tick() {
 }
 setInterval(tick, 500);
 
-function render() {
+// Draws every panel. render(true), for a message or a navigation step, lets a panel whose
+// inputs did not change keep its pixels (draw.js unchanged); render() redraws them all.
+let reuse = false;
+function render(keep = false) {
+  reuse = keep;
   const geo = topics.geometry || { bases: [], root: "-" };
   $("root").textContent = geo.root;
   const g = topics.gtracks || { t: null, tracks: [] };
@@ -100,7 +104,7 @@ function render() {
 
 let pending = false;
 function schedule() {  // a redraw for navigation, at most one per animation frame
-  if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; render(); }); }
+  if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; render(true); }); }
 }
 
 // ---- plan views: robust extents, navigation (grid, scale bar and shapes: draw.js) ----
