@@ -88,14 +88,16 @@ return out;
 """
 
 # Where a frame's time goes, on the live state: parse and record (median of 5), and the
-# draw split by the page's functions (each wrapped, mean ms over 5 renders).
+# draw split by the page's functions (each wrapped, mean ms over 5 renders; render()
+# without argument draws every panel, as when every topic changed).
 BREAKDOWN_JS = """
 const text = JSON.stringify({ topics: timeline.live() }), out = { kB: text.length / 1e3 };
 const median = (f) => { const ms = []; for (let i = 0; i < 5; i++) { const t = performance.now(); f();
   ms.push(performance.now() - t); } return ms.sort((a, b) => a - b)[2]; };
 out.parse = median(() => JSON.parse(text));
 out.record = median(() => { timeline.take(JSON.parse(text).topics); timeline.settle(); }) - out.parse;
-const fns = ['drawPlan', 'trackTable', 'waterfall', 'tmaPlan', 'sonarTable', 'services', 'details', 'tick']
+const fns = ['drawPlan', 'grid', 'crosses', 'drawTracks', 'trackTable', 'waterfall', 'tmaPlan', 'sonarTable',
+  'services', 'details', 'tick']
   .filter((f) => typeof window[f] === 'function'), acc = {};
 const orig = Object.fromEntries(fns.map((f) => [f, window[f]]));
 fns.forEach((f) => { acc[f] = 0; window[f] = function (...a) {

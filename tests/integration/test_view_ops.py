@@ -66,7 +66,8 @@ def labels_inside(driver: Any) -> list[Any]:
 def test_tables_sort_filter_and_show_a_tracks_bases_and_history(browser: Any, tmp_path: Path) -> None:  # noqa: F811
     """A click on a header sorts (again: reversed), the text box filters, a selected
     global track shows the bases that hold it and its last updates, a selected sonar
-    track its array, TMA and bearings; m/s or kn everywhere. About 6 s."""
+    track its array, TMA and bearings; m/s or kn everywhere; the rows updated in place by
+    the next message. About 6 s."""
     from selenium.webdriver.common.by import By
 
     with Deployment(tmp_path) as d:
@@ -110,6 +111,18 @@ def test_tables_sort_filter_and_show_a_tracks_bases_and_history(browser: Any, tm
         speed = browser.find_element(By.CSS_SELECTOR, "#tracks tr[data-id='3'] td:nth-child(6)").text
         assert speed == f"{150 * KN:.0f}", speed
         assert f"{150 * KN:.1f} kn, course 90.0 deg" in browser.find_element(By.ID, "details").text
+        # the next message updates the rows in place: the same row elements, new values
+        browser.execute_script("window.kept = [...document.querySelectorAll('#tracks tr')]")
+        d.session.put(f"{ROOT}/radar/gtracks", gtracks(12.0, [
+            (3, "confirmed", 5.3e3, 1e3, 150.0, [["b1", 4], ["b2", 9]]),
+            (1, "tentative", 9.3e3, 2e3, 100.0, [["b3", 2]]),
+            (2, "coasting", -3.7e3, 3e3, 250.0, [["b1", 5]])]))
+        wait("the tracks of t=12", lambda: browser.execute_script("return topics.gtracks.t") == 12.0, 30)
+        assert browser.execute_script(
+            "return [...document.querySelectorAll('#tracks tr')].every((r, i) => r === kept[i]) && kept.length"
+            " === 3"), "rows rebuilt"
+        assert column(browser, "tracks", "id") == ["2", "3", "1"]
+        assert browser.find_element(By.CSS_SELECTOR, "#tracks tr[data-id='2'] td:nth-child(3)").text == "-3.70"
 
         msgs = sonar_messages()
         second = dict(msgs[3][1]["tracks"][0], id=8, status="tentative", x=[3.0, 0.0, 60.0, 0.0])
@@ -200,6 +213,18 @@ def test_waterfall_axis_tma_legend_labels_inside_and_palette_for_colour_deficien
         assert [t for t, _ in ticks] == [f"0:{s:02d}" for s in range(0, 41, 5)], ticks  # message time
         ys = [y for _, y in ticks]
         assert ys == sorted(ys, reverse=True), ticks  # later times higher up
+        # detections drawn from the page's pixel layer: each 2 x 2 px where the axes place it
+        dots = browser.execute_script(
+            "const c = document.querySelector('#array-a1 .waterfall'), ctx = c.getContext('2d'), a = c.axis;"
+            "const W = c.width - 50, H = c.height - 26, px = (x, y) => Array.from(ctx.getImageData(x, y, 1, 1).data);"
+            "return topics['waterfall/a1'].rows.flatMap(([t, bs]) => bs.map((b) => {"
+            "  const x = Math.round(50 + b / 360 * W), y = Math.round((a.t1 - t) / (a.t1 - a.t0) * H);"
+            "  return [b, t, px(x - 1, Math.max(y - 1, 0)), px(x, y), px(x + 3, y + 3)]; }))")
+        assert len(dots) == 6, dots
+        for b, t, inside, corner, beside in dots:
+            if abs(b - 143.2) < 1 and t == 20.0:  # the detection no bearing track crosses
+                assert inside == corner == [0xcf, 0xd8, 0xdc, 255] and beside != inside, (b, t, inside, corner, beside)
+        assert sum(abs(b - 143.2) < 1 and t == 20.0 for b, t, *_ in dots) == 1, dots
         legend = browser.find_element(By.CSS_SELECTOR, "#array-a1 .tma-legend").text
         for item in ("own ship", "TMA", "constrained TMA", "truth", "range unobservable"):
             assert item in legend, legend

@@ -48,7 +48,33 @@ function timeTicks(t0, t1) {
 
 const mss = (t) => `${Math.floor(t / 60)}:${String(Math.round(t % 60)).padStart(2, "0")}`;
 
+// The detections of a waterfall as pixels (2 x 2 each, #cfd8dc) in one buffer, put on an
+// offscreen canvas and blitted (24,000 fillRect calls a frame otherwise). Little-endian
+// RGBA words, as every browser's.
+const DOT = 0xffdcd8cf;
+function dotLayer(canvas, w, X, Y, W, H) {
+  const c = canvas.dots || (canvas.dots = { el: document.createElement("canvas"), img: null });
+  if (c.el.width !== W || c.el.height !== H) { c.el.width = W; c.el.height = H; c.img = null; }
+  c.img = c.img || new ImageData(W, H);
+  const px = new Uint32Array(c.img.data.buffer);
+  px.fill(0);
+  for (const [t, brgs] of w.rows) {
+    const y = Math.round(Y(t)) - 1;
+    for (const b of brgs) {
+      const x = Math.round(X(b) - AXIS_L) - 1;
+      for (let dy = 0; dy < 2; dy++) {
+        if (y + dy < 0 || y + dy >= H) continue;
+        if (x >= 0 && x < W) px[(y + dy) * W + x] = DOT;
+        if (x + 1 >= 0 && x + 1 < W) px[(y + dy) * W + x + 1] = DOT;
+      }
+    }
+  }
+  c.el.getContext("2d").putImageData(c.img, 0, 0);
+  return c.el;
+}
+
 function waterfall(canvas, w) {
+  if (unchanged(canvas, [w])) return;
   const ctx = canvas.getContext("2d"), W = canvas.width - AXIS_L, H = canvas.height - AXIS_B;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   canvas.labels = [];
@@ -64,28 +90,35 @@ function waterfall(canvas, w) {
     label(ctx, canvas, mss(t), AXIS_L - 6 - ctx.measureText(mss(t)).width, Y(t) + 4);
   });
   ctx.save(); ctx.translate(10, H / 2 + 60); ctx.rotate(-Math.PI / 2); ctx.fillText("time (min:s), newest at top", 0, 0); ctx.restore();
-  ctx.fillStyle = "#cfd8dc";
-  w.rows.forEach(([t, brgs]) => brgs.forEach((b) => ctx.fillRect(X(b) - 1, Y(t) - 1, 2, 2)));
-  const dt = w.rows.length > 1 ? (t1 - w.rows[0][0]) / (w.rows.length - 1) : 1;
+  ctx.drawImage(dotLayer(canvas, w, X, Y, W, H), AXIS_L, 0);
+  bearingTracks(ctx, canvas, w, X, Y, t1);
+}
+
+// Confirmed stretches as lines (broken at gaps of 3 scans and through North) in one path,
+// tentative estimates as small marks in another, then the ids of the confirmed tracks.
+function bearingTracks(ctx, canvas, w, X, Y, t1) {
+  const dt = w.rows.length > 1 ? (t1 - w.rows[0][0]) / (w.rows.length - 1) : 1, marks = new Path2D(), ends = [];
+  ctx.strokeStyle = COLOURS.confirmed; ctx.lineWidth = 1.5;
+  ctx.beginPath();
   Object.entries(w.tracks).forEach(([id, pts]) => {
-    // confirmed stretches as lines (broken at gaps of 3 scans and through North),
-    // tentative estimates as small marks
-    ctx.strokeStyle = COLOURS.confirmed; ctx.fillStyle = COLOURS.tentative; ctx.lineWidth = 1.5;
-    ctx.beginPath();
     pts.forEach((p, j) => {
       const q = pts[j - 1];
-      if (!p[2]) { ctx.fillRect(X(p[1]) - 1.5, Y(p[0]) - 0.5, 3, 1); return; }
+      if (!p[2]) { marks.rect(X(p[1]) - 1.5, Y(p[0]) - 0.5, 3, 1); return; }
       const join = q && q[2] && p[0] - q[0] <= 3 * dt && Math.abs(p[1] - q[1]) <= 180;
       join ? ctx.lineTo(X(p[1]), Y(p[0])) : ctx.moveTo(X(p[1]), Y(p[0]));
     });
-    ctx.stroke();
     const last = pts[pts.length - 1];
-    if (last[2]) { ctx.fillStyle = COLOURS.confirmed; label(ctx, canvas, id, X(last[1]) + 3, Y(last[0]) + 10); }
+    if (last[2]) ends.push([id, last]);
   });
+  ctx.stroke();
+  ctx.fillStyle = COLOURS.tentative; ctx.fill(marks);
+  ctx.fillStyle = COLOURS.confirmed;
+  ends.forEach(([id, last]) => label(ctx, canvas, id, X(last[1]) + 3, Y(last[0]) + 10));
 }
 
 function tmaPlan(canvas, tma, truth) {
-  const ctx = canvas.getContext("2d");
+  const ctx = canvas.getContext("2d"), n = nav(canvas);
+  if (unchanged(canvas, [tma, truth, unit, vunit, n.auto, n.cx, n.cy, n.s])) return;
   // an unobservable range leaves the solution's position out of the extent
   const pts = tma.sols.filter((s) => s.range_obs !== false).map((s) => [s.x, s.y]);
   if (truth) truth.x.forEach((x, i) => pts.push([x, truth.y[i]]));
@@ -98,29 +131,52 @@ function tmaPlan(canvas, tma, truth) {
   polyline(ctx, xf, tma.own);
   if (truth) {
     ctx.strokeStyle = PALETTE.truth;
-    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 4));
+    crosses(ctx, xf, truth, 4);
   }
   const own = tma.own.length ? tma.own[tma.own.length - 1] : [0, 0], far = 2 * canvas.width / xf.s;
+  ctx.font = "11px sans-serif";
+  [false, true].forEach((constrained) => {  // one path per colour and shape
+    const sols = tma.sols.filter((s) => !!s.constrained === constrained);
+    if (sols.length) solutions(ctx, xf, sols, constrained ? CONSTRAINED : COLOURS.confirmed, own, far);
+  });
   const lines = tma.sols.map((s) => {
-    const c = s.constrained ? CONSTRAINED : COLOURS.confirmed, px = xf.x(s.x), py = xf.y(s.y);
     const range = s.range_obs === false ? "range unobservable" : `${dist(s.range)} ${unit}`;
     const text = `${s.track}: ${range} ${num(s.course, 0)}\u00b0 ${spd(s.speed, 1)} ${vunit}`;
-    ctx.strokeStyle = c; ctx.fillStyle = c; ctx.font = "11px sans-serif";
-    if (s.range_obs === false) {  // what is known: the bearing, dashed from own ship
-      const b = Math.atan2(s.x - own[0], s.y - own[1]);
-      ctx.setLineDash([6, 4]); ctx.beginPath(); ctx.moveTo(xf.x(own[0]), xf.y(own[1]));
-      ctx.lineTo(xf.x(own[0] + far * Math.sin(b)), xf.y(own[1] + far * Math.cos(b))); ctx.stroke();
-      ctx.setLineDash([]);
-    }
-    ellipses(ctx, xf, [[s.x, s.y, s.ell]]);
-    ctx.beginPath(); ctx.arc(px, py, 3.5, 0, 2 * Math.PI); ctx.fill();
-    ctx.beginPath(); ctx.moveTo(px, py);
-    ctx.lineTo(xf.x(s.x + s.vx * TMA_LEAD_S), xf.y(s.y + s.vy * TMA_LEAD_S)); ctx.stroke();
+    const px = xf.x(s.x), py = xf.y(s.y);
+    ctx.fillStyle = s.constrained ? CONSTRAINED : COLOURS.confirmed;
     if (fin(px) && fin(py)) label(ctx, canvas, text, px + 6, py - 6);
     return text;
   });
   scaleBar(ctx, canvas, xf);
   // the same lines under the plan: a solution off the canvas is still read
   const list = canvas.parentElement.querySelector(".sols");
-  list.replaceChildren(...lines.map((t) => Object.assign(document.createElement("div"), { textContent: t })));
+  if (list.dataset.text !== lines.join("\n")) {
+    list.dataset.text = lines.join("\n");
+    list.replaceChildren(...lines.map((t) => Object.assign(document.createElement("div"), { textContent: t })));
+  }
+}
+
+// TMA solutions of one colour: where the range is unobservable the bearing, dashed from
+// own ship; the 2-sigma ellipses; the positions; the 10 min course and speed vectors.
+function solutions(ctx, xf, sols, colour, own, far) {
+  ctx.strokeStyle = colour; ctx.fillStyle = colour;
+  const blind = sols.filter((s) => s.range_obs === false && fin(s.x) && fin(s.y));
+  if (blind.length) {
+    ctx.setLineDash([6, 4]); ctx.beginPath();
+    blind.forEach((s) => {
+      const b = Math.atan2(s.x - own[0], s.y - own[1]);
+      ctx.moveTo(xf.x(own[0]), xf.y(own[1]));
+      ctx.lineTo(xf.x(own[0] + far * Math.sin(b)), xf.y(own[1] + far * Math.cos(b)));
+    });
+    ctx.stroke(); ctx.setLineDash([]);
+  }
+  ellipses(ctx, xf, sols.map((s) => [s.x, s.y, s.ell]));
+  const dots = new Path2D(), vectors = new Path2D();
+  sols.forEach((s) => {
+    const px = xf.x(s.x), py = xf.y(s.y), qx = xf.x(s.x + s.vx * TMA_LEAD_S), qy = xf.y(s.y + s.vy * TMA_LEAD_S);
+    if (!fin(px) || !fin(py)) return;
+    dots.moveTo(px + 3.5, py); dots.arc(px, py, 3.5, 0, 2 * Math.PI);
+    if (fin(qx) && fin(qy)) { vectors.moveTo(px, py); vectors.lineTo(qx, qy); }
+  });
+  ctx.fill(dots); ctx.stroke(vectors);
 }

@@ -12,10 +12,10 @@ const LIMIT_M = 1e8;       // a coordinate beyond this never counts for an exten
 const OUTLIER_K = 10;      // farther than K x the median distance from the median: an outlier
 const FLOOR_M = { plan: 3e5, tma: 1e5 };  // ... but never nearer than this
 const MAX_GRID = 40;       // grid lines per direction, at most
-const MAX_ROWS = 500;
-const OFF_SCALE_PX = 18;   // ring drawn for an ellipse larger than the canvas      // rows of the track list, at most
-const SPAN_M = [50, 1e8];
-const MIN_AUTO_M = 5e3;    // the automatic extent spans at least this (one own-ship point)  // zoom limits: the canvas width spans between these
+const MAX_ROWS = 500;      // rows of the track list, at most
+const OFF_SCALE_PX = 18;   // ring drawn for an ellipse larger than the canvas
+const SPAN_M = [50, 1e8];  // zoom limits: the canvas width spans between these
+const MIN_AUTO_M = 5e3;    // the automatic extent spans at least this (one own-ship point)
 const UNITS = { km: 1000, NM: 1852 };
 const DATA = /^(gtracks|etracks\/|truth_radar|waterfall\/|tma\/|truth_sonar\/)/;
 const topics = {};
@@ -45,7 +45,7 @@ function connect() {
       timeline.take(m.topics);  // timeline.js: recorded, and shown unless paused
       Object.entries(m.ages || {}).forEach(([n, a]) => { got[n] = now - a; });
       if (m.limits) limits = m.limits;
-      render();
+      render(true);
     } finally {
       ws.send("ack");  // the server sends the next message only after this one is drawn
       timeline.frameDone(performance.now() - t0);
@@ -83,7 +83,11 @@ function tick() {
 }
 setInterval(tick, 500);
 
-function render() {
+// Draws every panel. render(true), for a message or a navigation step, lets a panel whose
+// inputs did not change keep its pixels (draw.js unchanged); render() redraws them all.
+let reuse = false;
+function render(keep = false) {
+  reuse = keep;
   const geo = topics.geometry || { bases: [], root: "-" };
   $("root").textContent = geo.root;
   const g = topics.gtracks || { t: null, tracks: [] };
@@ -100,10 +104,10 @@ function render() {
 
 let pending = false;
 function schedule() {  // a redraw for navigation, at most one per animation frame
-  if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; render(); }); }
+  if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; render(true); }); }
 }
 
-// ---- plan views: robust extents, navigation, grid, scale bar ----
+// ---- plan views: robust extents, navigation (grid, scale bar and shapes: draw.js) ----
 function grow(box, x, y) {
   box[0] = Math.min(box[0], x); box[1] = Math.max(box[1], x);
   box[2] = Math.min(box[2], y); box[3] = Math.max(box[3], y);
@@ -182,71 +186,6 @@ function listen(canvas, n) {
 
 function fitAll(canvas) { Object.assign(nav(canvas), { auto: true, box: null, follow: null }); render(); }
 
-function nice(v) {  // 1, 2 or 5 x 10^k nearest above v
-  const p = Math.pow(10, Math.floor(Math.log10(v))), m = v / p;
-  return (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10) * p;
-}
-
-function grid(ctx, canvas, xf) {
-  const u = UNITS[unit], step = nice(canvas.width / xf.s / u / 10) * u;
-  if (!fin(step) || step <= 0) return;
-  ctx.strokeStyle = "#1b2834"; ctx.fillStyle = "#4b6075"; ctx.lineWidth = 1; ctx.font = "10px sans-serif";
-  const txt = (v) => `${+(v / u).toPrecision(6)} ${unit}`;
-  canvas.graticule = null;
-  const x0 = Math.ceil(xf.wx(0) / step) * step, y0 = Math.ceil(xf.wy(canvas.height) / step) * step;
-  for (let i = 0, v = x0; i < MAX_GRID && v < xf.wx(canvas.width); i++, v = x0 + i * step) {
-    ctx.beginPath(); ctx.moveTo(xf.x(v), 0); ctx.lineTo(xf.x(v), canvas.height); ctx.stroke();
-    label(ctx, canvas, txt(v), xf.x(v) + 2, canvas.height - 4);
-  }
-  for (let i = 0, v = y0; i < MAX_GRID && v < xf.wy(0); i++, v = y0 + i * step) {
-    ctx.beginPath(); ctx.moveTo(0, xf.y(v)); ctx.lineTo(canvas.width, xf.y(v)); ctx.stroke();
-    label(ctx, canvas, txt(v), 2, xf.y(v) - 2);
-  }
-}
-
-function scaleBar(ctx, canvas, xf) {
-  const u = UNITS[unit], len = nice(canvas.width / 5 / xf.s / u), px = len * u * xf.s;
-  const text = `${+len.toPrecision(6)} ${unit}`, x = 12, y = canvas.height - 22;
-  ctx.strokeStyle = "#e0e0e0"; ctx.fillStyle = "#e0e0e0"; ctx.lineWidth = 2;
-  ctx.beginPath(); ctx.moveTo(x, y - 5); ctx.lineTo(x, y); ctx.lineTo(x + px, y); ctx.lineTo(x + px, y - 5); ctx.stroke();
-  ctx.font = "11px sans-serif"; ctx.fillText(text, x + 4, y - 6);
-  canvas.dataset.scale = text;
-}
-
-// Adds to the current path the ellipse e = [a, b, angle counter-clockwise from East]
-// around (x, y) (canvas y points down: rotated by -angle). One whose major semi-axis
-// exceeds the canvas' diagonal is off scale: its centre goes to `off` instead (drawn as a
-// dashed ring of OFF_SCALE_PX; its outline would lie mostly outside the canvas, and a
-// path thousands of pixels long per track is what froze the page).
-function ellipsePath(ctx, xf, x, y, e, off) {
-  if (!e || !fin(x) || !fin(y) || !e.every(fin)) return;
-  const c = ctx.canvas, px = xf.x(x), py = xf.y(y), a = Math.max(e[0] * xf.s, 0.5), r = -e[2];
-  if (a > Math.hypot(c.width, c.height)) { off.push([px, py]); return; }
-  if (px + a < 0 || px - a > c.width || py + a < 0 || py - a > c.height) return;  // all outside
-  ctx.moveTo(px + a * Math.cos(r), py + a * Math.sin(r));
-  ctx.ellipse(px, py, a, Math.max(e[1] * xf.s, 0.5), r, 0, 2 * Math.PI);
-}
-
-function ellipses(ctx, xf, items) {  // items: [x, y, ell] in the current stroke style
-  const off = [];
-  ctx.beginPath(); items.forEach((i) => ellipsePath(ctx, xf, i[0], i[1], i[2], off)); ctx.stroke();
-  if (!off.length) return;
-  ctx.setLineDash([2, 3]); ctx.beginPath();
-  off.forEach(([px, py]) => { ctx.moveTo(px + OFF_SCALE_PX, py); ctx.arc(px, py, OFF_SCALE_PX, 0, 2 * Math.PI); });
-  ctx.stroke(); ctx.setLineDash([]);
-}
-
-function linePath(ctx, xf, pts) {  // adds the polyline of pts, broken at non-finite points
-  let on = false;
-  pts.forEach((p) => {
-    if (!fin(p[0]) || !fin(p[1])) { on = false; return; }
-    on ? ctx.lineTo(xf.x(p[0]), xf.y(p[1])) : ctx.moveTo(xf.x(p[0]), xf.y(p[1]));
-    on = true;
-  });
-}
-
-function polyline(ctx, xf, pts) { ctx.beginPath(); linePath(ctx, xf, pts); ctx.stroke(); }
-
 // ---- radar plan view ----
 function followed(canvas, tracks) {
   const n = nav(canvas);
@@ -260,6 +199,9 @@ function followed(canvas, tracks) {
 
 function drawPlan(geo, g) {
   const canvas = $("plan"), ctx = canvas.getContext("2d"), n = nav(canvas);
+  const arcs = geo.bases.map((b) => topics[`etracks/${b.id}`]);
+  if (unchanged(canvas, [geo, g, topics.truth_radar, ...arcs, ...["trails", "ellipses", "arcs", "truth"].map(layer),
+    selected, unit, n.auto, n.cx, n.cy, n.s, n.follow])) return;
   const anchors = geo.bases.flatMap((b) => [b.tx, b.rx]);
   const now = robustBox(anchors, g.tracks.map((k) => [k.x[0], k.x[2]]), FLOOR_M.plan);
   const box = n.box ? n.box.slice() : [Infinity, -Infinity, Infinity, -Infinity];
@@ -294,17 +236,11 @@ function drawPlan(geo, g) {
   const truth = topics.truth_radar;
   if (layer("truth") && truth) {
     ctx.strokeStyle = PALETTE.truth; ctx.lineWidth = 1.5;
-    truth.x.forEach((x, i) => cross(ctx, xf.x(x), xf.y(truth.y[i]), 5));
+    crosses(ctx, xf, truth, 5);
   }
   drawTracks(ctx, xf, g.tracks);
   scaleBar(ctx, canvas, xf);
   $("plan-scale").textContent = canvas.dataset.scale;
-}
-
-function cross(ctx, px, py, r) {
-  if (!fin(px) || !fin(py)) return;
-  ctx.beginPath(); ctx.moveTo(px - r, py - r); ctx.lineTo(px + r, py + r);
-  ctx.moveTo(px - r, py + r); ctx.lineTo(px + r, py - r); ctx.stroke();
 }
 
 // Tracks drawn in one path per status colour and layer (10^4 tracks: one stroke each
@@ -383,15 +319,6 @@ $("follow").addEventListener("click", () => {
   render();
 });
 $("units").addEventListener("change", (ev) => { unit = ev.target.value; render(); });
-
-// A label kept inside its canvas (shifted left or down when it would be cut at an edge);
-// every label drawn this frame is listed in canvas.labels ([text, x, y, width]).
-function label(ctx, canvas, text, x, y) {
-  const w = ctx.measureText(text).width, h = 11;
-  const lx = Math.min(Math.max(x, 2), canvas.width - w - 2), ly = Math.min(Math.max(y, h + 1), canvas.height - 3);
-  ctx.fillText(text, lx, ly);
-  (canvas.labels = canvas.labels || []).push([text, lx, ly, w]);
-}
 
 function select(id) { selected = id; selectedSonar = null; render(); }
 
