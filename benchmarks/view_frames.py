@@ -265,20 +265,34 @@ def pct(v: list[float]) -> tuple[float, float, float]:
     return (float(np.percentile(a, 50)), float(np.percentile(a, 99)), float(a.max())) if a.size else (np.nan,) * 3
 
 
-def run(args: argparse.Namespace) -> dict[str, Any]:
-    scene = Scene(args.tracks, args.sonar)
-    tpl = load_topics(args.tracks, args.sonar, 10)
+@contextmanager
+def live_view(size: tuple[int, int] | None = None) -> Iterator[tuple[Any, Any, int]]:
+    """A loopback router, `pfusion view` on it and a page (window `size`) with every layer
+    on, the elementary arcs included: (Zenoh session, WebDriver, the view's port)."""
     router, endpoint = start_router()
     port = free_port()
     view = Child("view", "view", "--config", str(CONFIG), "--connect", endpoint, "--port", str(port))
-    stop = threading.Event()
     try:
         wait_port(port, 60)
         with open_session(ZenohConfig([endpoint], [], ROOT)) as session, chromium() as d:
+            if size is not None:
+                d.set_window_size(*size)
             d.get(f"http://127.0.0.1:{port}/")
             while not d.execute_script("return wsOpen"):
                 time.sleep(0.2)
             d.execute_script("$('layer-arcs').checked = true;")
+            yield session, d, port
+    finally:
+        view.stop()
+        router.stop()
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    scene = Scene(args.tracks, args.sonar)
+    tpl = load_topics(args.tracks, args.sonar, 10)
+    stop = threading.Event()
+    try:
+        with live_view() as (session, d, port):
             fill_ms = d.execute_script(FILL_JS, tpl, args.history, 1.0)
             filled_mb = heap_mb(d)
             feed = threading.Thread(target=publish, args=(session, scene, args.seconds + 30, stop))
@@ -300,8 +314,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             parts = d.execute_script(BREAKDOWN_JS)
     finally:
         stop.set()
-        view.stop()
-        router.stop()
     return {"fill_s": fill_ms / 1e3, "filled_mb": filled_mb, "heap_mb": max(filled_mb, run_mb), "run_mb": run_mb,
             "rss_mb": rss_mb, "gaps": gaps, "frames": frames, "scrubs": scrubs, "parts": parts,
             "load": os.getloadavg(), "state": state, "wall": w1 - w0,

@@ -26,10 +26,7 @@ from typing import Any
 
 from PIL import Image
 
-from benchmarks.view_frames import CONFIG, FILL_JS, ROOT, T0, Scene, chromium, load_topics, publish
-from common.bus.procs import Child, start_router
-from common.bus.transport import free_port, open_session, wait_port
-from common.deploy.config import ZenohConfig
+from benchmarks.view_frames import FILL_JS, T0, Scene, live_view, load_topics, publish
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "img"
 
@@ -75,18 +72,9 @@ def main() -> int:
     ap.add_argument("--seconds", type=int, default=40, help="live seconds before the screenshots")
     args = ap.parse_args()
     scene, tpl = Scene(1000, args.sonar), load_topics(1000, args.sonar, 3)
-    router, endpoint = start_router()
-    port = free_port()
-    view = Child("view", "view", "--config", str(CONFIG), "--connect", endpoint, "--port", str(port))
     stop = threading.Event()
     try:
-        wait_port(port, 60)
-        with open_session(ZenohConfig([endpoint], [], ROOT)) as session, chromium() as d:
-            d.set_window_size(1300, 1000)
-            d.get(f"http://127.0.0.1:{port}/")
-            while not d.execute_script("return wsOpen"):
-                time.sleep(0.2)
-            d.execute_script("$('layer-arcs').checked = true;")
+        with live_view((1300, 1000)) as (session, d, _):
             d.execute_script(FILL_JS, tpl, 600, 1.0)
             feed = threading.Thread(target=publish, args=(session, scene, args.seconds + 60, stop))
             feed.start()
@@ -98,8 +86,6 @@ def main() -> int:
             feed.join()
     finally:
         stop.set()
-        view.stop()
-        router.stop()
     return 0
 
 
