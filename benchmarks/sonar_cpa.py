@@ -15,10 +15,14 @@ is back before the next scan; about 8 s a run).
 
 Scenes (scenarios/, docs/scenarios.md): sonar_cpa_coarse (60 s sampling, CPA 0.5 km,
 own-ship turn), sonar_cpa_fine_300m (30 s, 0.3 km, no turn), sonar_cpa_coarse_1km (60 s,
-1 km, no turn), sonar_cpa_fine_1km_turn (30 s, 1 km, turn).
+1 km, no turn), sonar_cpa_fine_1km_turn (30 s, 1 km, turn), sonar_cpa_cross (the last with
+a second contact whose bearing crosses the first's at the approach; the scores are the
+first contact's).
 
-Per run: the confirmed tracks within 5 sigma0 of the target's bearing (numbers: how many
-different ones, 1 = the track held); held: the fraction of the samples after the first
+Per run: the confirmed tracks within 5 sigma0 of the target's bearing, outside the
+cycles where another contact's bearing is within 10 sigma0 of it (a crossing, where a
+track of either contact could be either's; a track that swapped shows after it) (numbers:
+how many different ones, 1 = the track held); held: the fraction of the samples after the first
 one's confirmation at which it is confirmed; the first track's last TMA solution: its
 time after the closest approach, its position error against the CRLB
 (common.sonar.tma.crlb, all scan times, the array's sigma0) and its NEES (4 dof).
@@ -57,7 +61,8 @@ from common.sonar.trackers import bearing_tracker  # noqa: E402
 from common.wire.sim_messages import run_scenario  # noqa: E402
 from common.wire.sonar_messages import tma_hints_from, tma_message  # noqa: E402
 
-CASES = ("sonar_cpa_coarse", "sonar_cpa_fine_300m", "sonar_cpa_coarse_1km", "sonar_cpa_fine_1km_turn")
+CASES = ("sonar_cpa_coarse", "sonar_cpa_fine_300m", "sonar_cpa_coarse_1km", "sonar_cpa_fine_1km_turn",
+         "sonar_cpa_cross")
 MODES = ("gnn", "mht")
 GATE = 5.0  # sigma0
 
@@ -94,7 +99,9 @@ class Trace:
         self.times.append(t)
         self.own.append(own)
         self.truth.append([tr["x"][0], tr["y"][0], tr["vx"][0], tr["vy"][0]])
-        near = conf & (np.abs(wrap_pi(brg - tr["brg"][0])) <= GATE * sigma0)
+        b0 = tr["brg"][0]
+        crossing = bool(np.any(np.abs(wrap_pi(np.asarray(tr["brg"][1:]) - b0)) <= 2 * GATE * sigma0))
+        near = conf & (np.abs(wrap_pi(brg - b0)) <= GATE * sigma0) & (not crossing)
         self.near.append([int(i) for i in ids[near]])
         self.confirmed.append({int(i) for i in ids[conf]})
 

@@ -143,3 +143,17 @@ def test_issue_31_geometry_is_followed_through_the_approach(mode: str, seed: int
     assert good(r), r
     assert not good(run_once(COARSE, seed, mode, feedback=False))
 
+
+
+def test_a_smoothed_variance_that_loses_precision_keeps_the_filtered_row() -> None:
+    """sonar_cpa_fine_300m, MHT mode, seed 14: a TMA-predicted cycle's Q dwarfs P and the
+    retrodicted (smoothed) bearing variance came out negative (a NaN sigma in the
+    bearing register); common.sonar.mht.retrodiction keeps the filtered row instead."""
+    import warnings
+
+    sys.path.insert(0, str(REPO))
+    from benchmarks.sonar_cpa import run_once
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        run_once(REPO / "scenarios" / "sonar_cpa_fine_300m.toml", 14, "mht")

@@ -129,8 +129,9 @@ class Retrodiction:
                     continue
                 keep = live[r.track] & (cr > 0)
                 _, xt, Pt = mixture_moments(xr[keep], Pr[keep], cr[keep], r.track[keep], n_t)
-                r.rows[live, 1] = xt[live, 0]
-                r.rows[live, 2] = np.sqrt(Pt[live, 0, 0])
+                good = live & (Pt[:, 0, 0] > 0)  # else precision lost (Q >> P): keep the filtered row
+                r.rows[good, 1] = xt[good, 0]
+                r.rows[good, 2] = np.sqrt(Pt[good, 0, 0])
                 _main_detections(r, cr)
 
     def retire(self, uid: int) -> None:
