@@ -143,3 +143,24 @@ def test_radar_network_table_reaches_the_core() -> None:
     fusion = core.core  # type: ignore[attr-defined]
     assert (fusion.p.init_bases, fusion.p.seed_z, fusion.p.window) == (4, (2000.0,), 0.5)
     assert fusion.sigma_gamma == 7.0
+
+
+def test_reference_clocks_are_trusted_and_unknown_ones_refused() -> None:
+    """[radar.network] clock_reference: a reference base's offset stays 0 and adds nothing
+    to R ([C3]); the others are estimated; a name that is no base is refused."""
+    from common.radar.network.clocks import Clocks
+    from common.radar.network.params import NetworkParams
+
+    clocks = Clocks(2, 0.1, 1e-6, np.array([True, False]))
+    v, y, S = np.array([200.0, -150.0]), np.array([8.0, -6.0]), np.array([25.0, 25.0])
+    for b in (0, 1):
+        clocks.update(b, 1.0, v, y, S)
+    assert clocks.c[0] == 0.0 and clocks.V[0] == 0.0 and clocks.c[1] != 0.0
+    z, R = np.array([[1e5, 200.0]]), np.diag([25.0, 1.0])[None]
+    assert clocks.correct(0, z, R)[1][0, 0, 0] == 25.0
+    assert clocks.correct(1, z, R)[1][0, 0, 0] > 25.0
+    bases = ns.network(np.random.default_rng(3))
+    fusion = NetworkFusion(bases, NetworkParams(clock_reference=(bases[2].id,)))
+    assert np.flatnonzero(fusion.clocks.reference).tolist() == [2]
+    with pytest.raises(ValueError, match="nobase"):
+        NetworkFusion(bases, NetworkParams(clock_reference=("nobase",)))

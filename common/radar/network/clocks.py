@@ -15,7 +15,9 @@ order, with the estimate's own uncertainty:
     r_b += v_b c^_b,   R_rr += v_b^2 V                                            [C3]
 
 A common offset of every base is a shift of the network's time: unobservable from the
-ranges, and harmless to the tracks (it moves them along their own path).
+ranges; the tracks then run in a time frame shifted by it (they move along their own
+path). Bases declared as references (clocks trusted, e.g. GPS-disciplined) keep c_b = 0
+and V_b = 0: they anchor that common part.
 """
 
 from __future__ import annotations
@@ -25,25 +27,30 @@ import numpy as np
 
 class Clocks:
     """Per base: offset estimate c (B,) s, its variance V (B,) s^2, time of its last
-    update t (B,)."""
+    update t (B,); reference (B,) the bases whose clocks are trusted (never estimated)."""
 
-    def __init__(self, n_bases: int, sigma: float, drift: float) -> None:
+    def __init__(self, n_bases: int, sigma: float, drift: float,
+                 reference: np.ndarray | None = None) -> None:
+        self.reference = np.zeros(n_bases, dtype=bool) if reference is None else reference
         self.c = np.zeros(n_bases)
-        self.V = np.full(n_bases, sigma ** 2)
+        self.V = np.where(self.reference, 0.0, sigma ** 2)
         self.t = np.full(n_bases, np.nan)
         self.drift = drift
-        self.floor = sigma ** 2
+        self.floor = np.where(self.reference, 0.0, sigma ** 2)
 
     def correct(self, b: int, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """[C3] on z (N, m) [r_b, v_b, ...] and R (N, m, m) of base b; copies."""
         z, R = z.copy(), R.copy()
         z[:, 0] += z[:, 1] * self.c[b]
-        R[:, 0, 0] += z[:, 1] ** 2 * max(self.V[b], self.floor)
+        R[:, 0, 0] += z[:, 1] ** 2 * max(self.V[b], self.floor[b])
         return z, R
 
     def update(self, b: int, t: float, v: np.ndarray, y: np.ndarray, S: np.ndarray) -> None:
         """[C1]-[C2] at t from range rates v (K,), range innovations y (K,) of corrected
-        measurements and their variances S (K,) without the clock term."""
+        measurements and their variances S (K,) without the clock term. A reference
+        base is not updated."""
+        if self.reference[b]:
+            return
         if np.isfinite(self.t[b]):
             self.V[b] += self.drift * max(t - self.t[b], 0.0)
         self.t[b] = t

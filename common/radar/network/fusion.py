@@ -80,7 +80,11 @@ class NetworkFusion:
         rx = np.array([b.rx for b in bases], dtype=float)
         _, rec = np.unique(np.round(rx, 3), axis=0, return_inverse=True)
         self.sites = Sites(np.array([b.tx for b in bases], dtype=float), rx, rec.ravel())
-        self.clocks = Clocks(len(bases), self.p.clock_sigma, self.p.clock_drift)
+        unknown = sorted(set(self.p.clock_reference) - set(self.ids))
+        if unknown:
+            raise ValueError(f"clock_reference names unknown bases: {', '.join(unknown)}")
+        self.clocks = Clocks(len(bases), self.p.clock_sigma, self.p.clock_drift,
+                             np.isin(self.ids, list(self.p.clock_reference)))
         self.dec = Decorrelator(sigma_gamma, sigma_omega, self.p.decor_gate)
         self.tracks = Tracks(self.p, self.sites.receiver)
         self.heap: list[tuple[float, int, int, ElementaryTracks]] = []

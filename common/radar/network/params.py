@@ -22,6 +22,9 @@ class NetworkParams(Params):
     decor_gate: chi-square bound on an equivalent measurement against its prediction.
     clock_sigma: prior sigma of a base's clock offset (common.radar.network.clocks).
     clock_drift: random-walk power of a base's clock offset.
+    clock_reference: bases whose clocks are trusted (e.g. GPS-disciplined nodes): offset
+        0, not estimated; one anchors the offset common to every base, which the ranges
+        cannot observe (docs/networks.md, Limits).
     q, q_z: white-acceleration power of the CV model on (x, y) and on z.
     gate_prob: probability of the chi-square gates of members and assignment.
     member_misses: consecutive out-of-gate reports after which a member is released.
@@ -49,6 +52,7 @@ class NetworkParams(Params):
     decor_gate: float = 30.0
     clock_sigma: float = 0.1
     clock_drift: float = 1e-6
+    clock_reference: tuple[str, ...] = ()
     q: float = 1.0
     q_z: float = 0.25
     gate_prob: float = 0.9999
