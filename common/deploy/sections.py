@@ -62,6 +62,10 @@ def check_all(cfg: Config) -> None:
     for k, v in table(cfg.doc, "sonar.tma.bounds").items():
         if isinstance(v, dict):
             array_bounds(cfg, k)
+    unknown = sorted(set(section(cfg, "radar.network", NetworkParams).clock_reference)
+                     - {b.id for b in cfg.bases})
+    if unknown:
+        raise ConfigError("radar.network.clock_reference", f"not a configured base: {', '.join(unknown)}")
     for k, v in table(cfg.doc, "radar.ingest").items():
         if isinstance(v, dict):
             cfg.base(k)

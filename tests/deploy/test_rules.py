@@ -118,6 +118,14 @@ def test_per_array_bounds_are_checked_merged(tmp_path: Path) -> None:
         check(str(f))
 
 
+def test_clock_reference_names_configured_bases(tmp_path: Path) -> None:
+    f = tmp_path / "bad.toml"
+    f.write_text('[[radar.base]]\nid = "b1"\ntx = [1.0, 0.0, 0.0]\nrx = [0.0, 0.0, 0.0]\n'
+                 'channels = ["c"]\n[radar.network]\nclock_reference = ["b1", "b9"]\n')
+    with pytest.raises(ConfigError, match=r"radar.network.clock_reference.*not a configured base: b9"):
+        check(str(f))
+
+
 def test_sim_detection_probability_is_checked_by_constructor_and_params_check(tmp_path: Path) -> None:
     with pytest.raises(ParamError, match=r"\[SonarArraySim\] pd = 1.9 is outside \[0, 1\]"):
         SonarArraySim(pd=1.9)
