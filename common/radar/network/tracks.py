@@ -23,6 +23,7 @@ class Tracks:
         self.p = params
         self.receiver = receiver
         self.next_id = 1
+        self.id_step = 1
         self.id = np.zeros(0, dtype=np.int64)
         self.status = np.zeros(0, dtype=np.int64)
         self.x = np.zeros((0, 6))
@@ -96,18 +97,33 @@ class Tracks:
 
     def open(self, t: float, x: np.ndarray, P: np.ndarray, members: list[tuple[int, int]]) -> None:
         """A tentative track at t with its members."""
-        self.id = np.append(self.id, self.next_id)
-        self.status = np.append(self.status, Status.TENTATIVE)
-        self.x = np.vstack([self.x, x[None]])
-        self.P = np.concatenate([self.P, P[None]])
-        for name in ("t", "t_update", "born", "cycle_start"):
-            setattr(self, name, np.append(getattr(self, name), t))
-        self.hits = np.append(self.hits, 0)
-        self.cycle_bases.append(set())
-        self.members.append({})
+        self.insert(self.next_id, Status.TENTATIVE, t, x, P, t, t, 0, members)
+        self.next_id += self.id_step
+
+    def striped(self, first: int, step: int) -> None:
+        """Number new tracks first, first + step, ... (partitions: unique across them)."""
+        self.next_id, self.id_step = first, step
+
+    def row_of(self, tid: int) -> int:
+        """Row of track number tid, or -1."""
+        r = self._row(tid)
+        return r if r < len(self) and self.id[r] == tid else -1
+
+    def insert(self, tid: int, status: int, t: float, x: np.ndarray, P: np.ndarray,
+               t_update: float, born: float, hits: int, members: list[tuple[int, int]]) -> None:
+        """Track number tid with its state (a handed-over track), in id order; members
+        already held by another track are left out."""
+        r = self._row(tid)
+        for name, v in (("id", tid), ("status", status), ("t", t), ("t_update", t_update),
+                        ("born", born), ("hits", hits), ("cycle_start", t)):
+            setattr(self, name, np.insert(getattr(self, name), r, v))
+        self.x = np.insert(self.x, r, x, axis=0)
+        self.P = np.insert(self.P, r, P, axis=0)
+        self.cycle_bases.insert(r, set())
+        self.members.insert(r, {})
         for b, e in members:
-            self.add_member(len(self) - 1, b, e)
-        self.next_id += 1
+            if (b, e) not in self.owner and b not in self.members[r]:
+                self.add_member(r, b, e)
 
     def near(self, t: float, x: np.ndarray, P: np.ndarray) -> bool:
         """A track whose predicted position is within the chi-square(3) gate of x."""
