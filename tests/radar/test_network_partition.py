@@ -210,7 +210,8 @@ def test_regions_and_rules() -> None:
     assert list(r.index(x)) == [0, 1, 1, 2]
     assert list(r.beyond(1, x)) == [True, False, False, True]
     assert list(r.beyond(0, x)) == [False, False, True, True]
-    for bad in ({"partitions": ("a", "b")}, {"partitions": ("a", "a"), "partition_splits": (0.0,)},
+    for bad in ({"partitions": ("a", "b"), "partition_splits": ()},
+                {"partitions": ("a", "a"), "partition_splits": (0.0,)},
                 {"partitions": ("a", "b/c"), "partition_splits": (0.0,)},
                 {"partitions": ("a", "b", "c"), "partition_splits": (1.0, 0.0)},
                 {"partition_axis": "z"}):

@@ -7,7 +7,17 @@ import re
 from dataclasses import dataclass
 from typing import ClassVar
 
-from common.core.params import PROB_OPEN, Params, Range, Rule, count, non_negative, order, positive
+from common.core.params import (
+    PROB_OPEN,
+    Params,
+    Range,
+    Rule,
+    count,
+    non_negative,
+    order,
+    positive,
+    unbounded,
+)
 
 
 @dataclass(frozen=True)
@@ -52,7 +62,7 @@ class NetworkParams(Params):
         ascending order along partition_axis; empty: one instance, no partition.
     partition_axis: "x" (East) or "y" (North): the ENU axis the regions split.
     partition_splits: the boundaries between consecutive regions along that axis (one
-        fewer than partitions, ascending).
+        fewer than partitions, ascending; unused without partitions).
     partition_margin: hysteresis: a confirmed track is handed over to the region it is
         in once it is this far beyond its partition's region.
     handover_timeout: message time after which an unacknowledged handover is given up
@@ -88,7 +98,7 @@ class NetworkParams(Params):
     merge_distance: float = 10e3
     partitions: tuple[str, ...] = ()
     partition_axis: str = "x"
-    partition_splits: tuple[float, ...] = ()
+    partition_splits: tuple[float, ...] = (0.0,)
     partition_margin: float = 5e3
     handover_timeout: float = 5.0
 
@@ -103,7 +113,8 @@ class NetworkParams(Params):
         "cell_coarse": positive("m"), "cell_fine": positive("m"), "max_cells": count(1),
         "max_sigma": positive("m"), "cycle": positive("s"), "confirm_cycles": count(1),
         "coast": positive("s"), "coast_tentative": positive("s"), "report_period": positive("s"),
-        "merge_distance": non_negative("m"), "partition_splits": Range("m", -1e7, 1e7),
+        "merge_distance": non_negative("m"),
+        "partition_splits": unbounded("m", "an ENU coordinate"),
         "partition_margin": non_negative("m"), "handover_timeout": positive("s"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
@@ -111,7 +122,7 @@ class NetworkParams(Params):
         order("coast_tentative", "coast", strict=False),
         Rule(("partition_axis",), lambda a: a in ("x", "y"), 'partition_axis "x" or "y"'),
         Rule(("partitions", "partition_splits"),
-             lambda n, s: (not n and not s) or (len(n) >= 2 and len(set(n)) == len(n)
+             lambda n, s: not n or (len(n) >= 2 and len(set(n)) == len(n)
                                                  and len(s) == len(n) - 1
                                                  and all(a < b for a, b in zip(s, s[1:]))),
              "no partitions, or >= 2 distinct partitions and one fewer ascending "

@@ -108,7 +108,7 @@ class Partition:
                 del self.pending[n]
                 self.counts["timeouts"] += 1
         T = self.f.tracks
-        if not len(T):
+        if not len(T) or not np.isfinite(t):
             return []
         xp, Pp = T.predicted(t)
         out = []
