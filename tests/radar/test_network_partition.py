@@ -1,7 +1,7 @@
 """Global fusion partitioned by region (common.radar.network.partition): two partitions
 split at x = 0 on the synthetic network of tests/radar/network_scene.py, every report
-pushed to both, handovers and claims exchanged in process after each report, against
-one NetworkFusion on the same reports."""
+pushed to both, handovers and claims exchanged in process after each report
+(tests/radar/partition_run.py), against one NetworkFusion on the same reports."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from common.radar.network.fusion import NetworkFusion, NetworkReport
 from common.radar.network.params import NetworkParams
 from common.radar.network.partition import Handed, Partition, Regions
 from tests.radar import network_scene as ns
+from tests.radar import partition_run
 
 PARAMS = NetworkParams(partitions=("west", "east"), partition_splits=(0.0,), partition_margin=3e3)
 DURATION = 35.0
@@ -34,36 +35,10 @@ def scene() -> ns.Scene:
     return ns.simulate(rng, ns.network(rng), P0, V, DURATION)
 
 
-def union(a: NetworkReport, b: NetworkReport) -> NetworkReport:
-    """The tracks of two partitions' reports of the same time, as one report."""
-    assert a.t == b.t
-    return dataclasses.replace(a, id=np.r_[a.id, b.id], status=np.r_[a.status, b.status],
-                               x=np.r_[a.x, b.x], P=np.r_[a.P, b.P])
-
-
-def exchange(parts: dict[str, Partition]) -> None:
-    """Every due handover adopted and acked; every partition's members claimed."""
-    for part in parts.values():
-        for to, h in part.due(part.f.done):
-            parts[to].adopt(h)
-            part.acked(h.number)
-    for part in parts.values():
-        for other in parts.values():
-            part.claim(other.name, [(other.f.ids[b], e) for b, e in other.f.tracks.owner])
-
-
 @functools.lru_cache(maxsize=None)
 def run_partitioned() -> tuple[list[NetworkReport], dict[str, Partition]]:
-    s = scene()
-    parts = {n: Partition(NetworkFusion(s.bases, PARAMS), PARAMS, n) for n in PARAMS.partitions}
-    outs: dict[str, list[NetworkReport]] = {n: [] for n in parts}
-    for b, t, rep in s.reports:
-        for n, part in parts.items():
-            outs[n] += [part.visible(r) for r in part.f.push(s.bases[b].id, t, rep)]
-        exchange(parts)
-    for n, part in parts.items():
-        outs[n] += part.f.flush()
-    return [union(a, b) for a, b in zip(outs["west"], outs["east"], strict=True)], parts
+    reports, parts, _ = partition_run.run(scene(), PARAMS)
+    return reports, parts
 
 
 @functools.lru_cache(maxsize=None)
