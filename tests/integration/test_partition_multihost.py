@@ -21,12 +21,14 @@ time against the one-partition radar/gtracks of that time: every aircraft held, 
 false and no duplicate track, in both; the same number of confirmed tracks; each
 aircraft's track within POS_TOL of the one-partition track's position; each aircraft
 held by one number throughout (the handed-over tracks keep theirs); three handovers
-sent, adopted and acked (metrics and keys), none timed out; no report rejected.
-About 30-40 s on 2 cores.
+sent, adopted and acked (metrics and keys), none timed out; no report rejected; and
+`pfusion evaluate` of the partitioned file (site1 replays the truth too) scores the union
+of the partitions at every time, with no number switch. About 35-45 s on 2 cores.
 """
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import time
@@ -86,14 +88,18 @@ def feed() -> tuple[dict[str, list[tuple[float, str, bytes]]], dict[float, dict[
     return out, truth
 
 
-def recording(path: Path, site: str) -> Path:
-    """The site's bases' etracks as a .pfrec file (record times: scene time)."""
+def recording(path: Path, site: str, truth: bool) -> Path:
+    """The site's bases' etracks as a .pfrec file (record times: scene time); with
+    `truth` also the simulator's truth."""
     bases = [b.id for b in load(DEPLOY / HOSTS[site]["config"]).bases]
-    records = sorted(r for b in bases for r in feed()[0][b])
+    records = sorted((t, f"radar/etracks/{b}", p) for b in bases for t, _, p in feed()[0][b])
+    if truth:
+        records = sorted(records + [(t, "sim/truth/radar", protocol.encode(m))
+                                    for t, m in feed()[1].items()])
     with path.open("wb") as f:
         w = RecordWriter(f, ROOT, 0.0)
-        for t, b, payload in records:
-            w.write(f"{ROOT}/radar/etracks/{b}", t, payload)
+        for t, key, payload in records:
+            w.write(f"{ROOT}/{key}", t, payload)
     return path
 
 
@@ -170,17 +176,21 @@ def test_two_partitions_give_the_tracks_of_one(net: Topology, tmp_path: Path) ->
                         "tcp/127.0.0.1:7447", "--name", "fusion-west", "radar/gtracks",
                         "radar/gtracks/*", "radar/handover/*", "radar/handover_ack/*",
                         "metrics/global_fusion/*"], "collector", stdout=subprocess.PIPE))
-    alive = ["global_fusion/west", "global_fusion/east", "global_fusion/main", "test/fusion-west"]
+    evaluate = net.start("fusion-west", pfusion_argv("evaluate", "--config", fusion),
+                         "fusion-west-evaluate", stdout=subprocess.PIPE)
+    alive = ["global_fusion/west", "global_fusion/east", "global_fusion/main", "test/fusion-west",
+             "evaluate/main"]
     replays = []
     for site in ("site1", "site2"):
-        argv = ["replay", str(recording(tmp_path / f"{site}.pfrec", site)), "--connect",
+        rec = recording(tmp_path / f"{site}.pfrec", site, truth=site == "site1")
+        argv = ["replay", str(rec), "--connect",
                 "tcp/127.0.0.1:7447", "--speed", str(SPEED), "--wait-timeout", "120"]
         for name in alive:
             argv += ["--wait-alive", name]
         replays.append(net.start(site, pfusion_argv(*argv), f"{site}-replay"))
     wait(net, lambda: not any(r.alive() for r in replays), "replays not done", 150.0)
     assert [r.proc.returncode for r in replays] == [0, 0]
-    time.sleep(2.0)  # the last etracks reach the fusions
+    time.sleep(1.0)  # the last etracks reach the fusions
     for f in fusions:
         assert f.stop(10.0) == 0, f.name
 
@@ -190,6 +200,9 @@ def test_two_partitions_give_the_tracks_of_one(net: Topology, tmp_path: Path) ->
 
     wait(net, lambda: len(finished()) == 3, "no final metrics of the fusions", 20.0)
     metrics = finished()
+    assert evaluate.stop(30.0) == 0  # it prints its table on SIGTERM
+    assert evaluate.proc.stdout is not None
+    table = evaluate.proc.stdout.read().decode()
     runtime = time.monotonic() - t0
     _, truth = feed()
     one = [r.msg for r in collector.of("radar/gtracks")]
@@ -223,5 +236,8 @@ def test_two_partitions_give_the_tracks_of_one(net: Topology, tmp_path: Path) ->
     assert len(collector.like("radar/handover/")) == CROSSING
     assert len(collector.like("radar/handover_ack/")) == CROSSING
     assert all(m["rejected"] == {} and m["missed"] == {} for m in metrics.values()), metrics
+    # pfusion evaluate on the partitioned deployment scores the union of radar/gtracks/*
+    steps = re.search(r"^steps (\d+) .* switches (\d+) ", table, re.M)
+    assert steps and int(steps[1]) == len(one) and int(steps[2]) == 0, table
     print(f"\n[partition multihost] reports {s2.reports}, worst position difference "
           f"{worst:.1f} m, handovers {handed}, runtime {runtime:.1f} s")
