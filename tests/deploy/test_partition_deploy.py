@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import zenoh
 
 from common.deploy.acl import access_control, grants, identity_of
 from common.deploy.config import load
@@ -49,3 +50,35 @@ def test_global_fusion_needs_its_partition_and_only_a_known_one() -> None:
     assert global_fusion(cfg, "east").bases == tuple(b.id for b in cfg.bases)
     with pytest.raises(ValueError, match="no partition"):
         global_fusion(load(DEPLOY / "site2.toml"), "east")
+
+
+def allowed(acl: dict, user: str, flow: str, message: str, key: str) -> bool:
+    """Whether the generated section lets ``user`` send (ingress) or receive (egress)
+    ``message`` on ``key`` (as tests/integration/test_security.py reads it)."""
+    rules = {r["id"]: r for r in acl["rules"]}
+    return any(flow in r["flows"] and message in r["messages"]
+               and any(zenoh.KeyExpr(k).includes(zenoh.KeyExpr(key)) for k in r["key_exprs"])
+               for p in acl["policies"] if user in p["subjects"] for r in (rules[i] for i in p["rules"]))
+
+
+def test_the_generated_access_control_lets_a_partition_use_its_keys_only() -> None:
+    acl = access_control(load(DEPLOY / "fusion.toml"))
+    root = "pf/v1"
+    keys = ["radar/gtracks", "radar/gtracks/west", "radar/gtracks/east", "radar/handover/west",
+            "radar/handover/east", "radar/handover_ack/west", "radar/handover_ack/east",
+            "radar/etracks/r1dvbt2"]
+    put = {u: {k for k in keys if allowed(acl, u, "ingress", "put", f"{root}/{k}")}
+           for u in ("global-fusion-west", "global-fusion-east")}
+    get = {u: {k for k in keys if allowed(acl, u, "egress", "put", f"{root}/{k}")}
+           for u in ("global-fusion-west", "viewer")}
+    assert put["global-fusion-west"] == {"radar/gtracks/west", "radar/handover/east",
+                                         "radar/handover_ack/east"}
+    assert put["global-fusion-east"] == {"radar/gtracks/east", "radar/handover/west",
+                                         "radar/handover_ack/west"}
+    assert get["global-fusion-west"] == {"radar/gtracks/east", "radar/handover/west",
+                                         "radar/handover_ack/west", "radar/etracks/r1dvbt2"}
+    assert get["viewer"] == {"radar/gtracks", "radar/gtracks/west", "radar/gtracks/east"}
+    assert allowed(acl, "global-fusion-east", "ingress", "liveliness_token",
+                   f"{root}/alive/global_fusion/east")
+    assert not allowed(acl, "global-fusion-east", "ingress", "liveliness_token",
+                       f"{root}/alive/global_fusion/west")
