@@ -38,6 +38,34 @@ def test_q_is_raised_by_the_bearing_acceleration_bound() -> None:
     assert rn.hints == {}
 
 
+def test_a_reused_number_does_not_inherit_the_old_tracks_hint() -> None:
+    """The single-hypothesis tracker reuses a deleted track's number: the new track must not
+    predict with the old one's TMA solution (seen on sonar_cpa_coarse gnn seed 3: a track
+    opened in the cycle its number's confirmed track was deleted kept that track's hint), and
+    a solution published later for the old track (older than the new track's birth) is refused."""
+    rn = RangeNoise()
+    rn.set(4, TmaHint(100.0, 0.0, 1000.0, 10.0, 0.0, converged=True))
+    rn.born(np.array([4]), 160.0)
+    assert rn.hints == {}
+    rn.set(4, TmaHint(100.0, 0.0, 1000.0, 10.0, 0.0, converged=True))  # late, for the old track
+    assert rn.hints == {}
+    rn.set(4, TmaHint(160.0, 0.0, 1000.0, 10.0, 0.0, converged=True))  # solved for the new track
+    assert 4 in rn.hints
+
+
+def test_the_tracker_drops_the_hint_of_a_number_it_reopens() -> None:
+    p = TrackerParams(mode="broadband", crossing=False)
+    tr = BearingTracker(p, "cylindrical", math.radians(2.0))
+    c = tr.step(0.0, np.array([1.0]), np.array([100.0]), 0.0)
+    number = int(c.ids[0])
+    tr.tma_hint(number, TmaHint(0.0, 1500.0, 1000.0, -8.0, 0.0, converged=True))
+    t = 0.0
+    while number in tr.step(t := t + 60.0, np.zeros(0), np.zeros(0), 0.0).ids:  # deleted by misses
+        pass
+    c = tr.step(t + 60.0, np.array([2.0]), np.array([100.0]), 0.0)
+    assert number in c.ids.tolist() and number not in tr.range_noise.hints
+
+
 def test_hint_widens_the_prediction_never_moves_it() -> None:
     p = TrackerParams(mode="broadband", crossing=False)
     runs = []

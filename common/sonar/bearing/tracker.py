@@ -177,8 +177,7 @@ class BearingTracker:
             x, P = predict(x, P, self._F(T), self._Q(T, q_man))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         if idx.size:  # the bearing block from the TMA solution (tma_prediction)
-            k, m2, C2 = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2],
-                                                       self._Q(T)[:, :2, :2])
+            k, m2, C2, _ = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2])
             x, P = with_bearing(x, P, k, m2, C2)
             if k.size and self.imm is not None:
                 for j in range(xm.shape[1]):
@@ -238,6 +237,7 @@ class BearingTracker:
         unused = ~gated
         unused[cols_] = False
         opened = self._open(t, z[unused], Rd[unused])
+        self.range_noise.born(tab.id[opened], t)  # a reused number is a new track
         self._group_lines()
 
         live = tab.active_indices()
