@@ -5,8 +5,8 @@ scene's [sonar.tracker]) -> TMA manager (common.sonar.tma.manager.TmaManager, de
 fed from the tracker's bearing register, as services/tma is; each TMA solution is given
 back to the tracker as a hint for its later cycles, as the bearing-tracker service takes
 them from sonar/tma/<a> (common.sonar.bearing.range_noise, tma_prediction;
-run_once(..., feedback=False) without). Figures: docs/decisions/026-tma-predicted-bearing.md
-(and 018 before it).
+run_once(..., feedback=False) without). Figures: docs/decisions/028-own-state-along-the-relative-track.md
+(026 and 018 before it).
 
 Run: .venv/bin/python benchmarks/sonar_cpa.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
 [--processes] (through a real router and the bearing-tracker and tma processes, the

@@ -1,36 +1,39 @@
 """Bearing and bearing rate predicted with a contact's TMA solution (issue 31, contacts that
 pass close; docs/equations.md "TMA-predicted bearing"; docs/decisions/026-tma-predicted-bearing.md,
-028-relative-range-rate.md).
+028-own-state-along-the-relative-track.md).
 
 Choice (stated; 000 predicts with its straight-line-segment model only): near a closest
 approach the bearing of a straight relative track moves tens of degrees per sample while
-000's model extrapolates its last rate. Along a straight relative track the bearing theta,
-its rate omega and the relative range rate s = r' / r obey a closed system (the
-scale-invariant part of modified polar coordinates), exact over T while the own ship holds
-its course:
+000's model extrapolates its last rate, and its rate estimate lags a rate that grows cycle
+after cycle. Along a straight relative track the bearing theta, its rate omega and the
+relative range rate s = r' / r obey a closed system (the scale-invariant part of modified
+polar coordinates), exact over T while the own ship holds its course:
 
   theta(t0 + T) = theta_0 + atan2(omega_0 T, 1 + s T),
   omega(t0 + T) = omega_0 / D,  D = (1 + s T)^2 + (omega_0 T)^2,
 
-the relative position being r_0 [1 + s T, omega_0 T] in the line-of-sight frame of t0. A
-track given its contact's converged TMA solution (p, v, P of 002 at t_h) takes s from it,
-s = (d . w) / |d|^2, d = p + v (t0 - t_h) - o(t0), w = v - u (u: own velocity), with
-variance J_s P J_s', and propagates its own [theta, omega] (x0, P0) by the system above:
-mean at (x0, s), covariance F P0 F' + G G' var(s) (F, G its Jacobians in x0 and s; a
-sigma-point spread of s can cross 1 + s T = 0 and give a meaningless mean), plus the
-bearing block of 000's Q. s is invariant along d -> k d, w -> k w, the direction bearings alone
-leave open before an own-ship manoeuvre, so a one-leg solution gives it as well.
+the relative position being r_0 [1 + s T, omega_0 T] in the line-of-sight frame of t0.
 
-When (the switch): only when that prediction departs from 000's constant rate by more
-than the track's bearing sigma at t0; elsewhere 000's model predicts as before.
+1. A solution whose range is observable (002's solve converged, issue 31's range rule):
+   every cycle the track propagates its own [theta, omega] (x0, P0) by that system with
+   s = (d . w) / |d|^2 of the solution at t0 (d = p + v (t0 - t_h) - o(t0), w = v - u, u
+   the own velocity), mean at (x0, s), covariance F P0 F' + G G' J_s P J_s' (F, G the
+   Jacobians in x0 and s) plus the bearing block of 000's Q. Far from the approach it is
+   000's constant rate; near it the rate grows as the geometry says.
+2. Otherwise (026): only when the solution's own bearing change over the cycle departs
+   from a constant rate by more than the track's bearing sigma (near the approach), the
+   solution's own [theta, omega] at t, theta = atan2(d_x, d_y), omega = (d_y w_x - d_x w_y)
+   / |d|^2, covariance J P J' + Q, if its bearing at t agrees with 000's prediction (1 dof,
+   both covariances). theta and omega are invariant along d -> k d, w -> k w, the direction
+   bearings alone leave open, so J P J' stays finite when the range is not observable.
 
 Guards (a stale or wrong solution cannot capture a track): a solution is used for
-``max_age`` seconds after its time (RangeNoise) and only by the track it was solved for
-(a reopened number drops it); it must be converged (002's stop rule); its [theta, omega]
-at t0 must agree with the track's estimate there (chi-square 99.7 %, 2 dof), so a
-solution of another contact fails; the predicted bearing sigma must be at most MAX_SIGMA.
-The track's own bearing and rate are propagated (the solution gives the curvature only)
-and a detection must still pass the 000 gate with the predicted covariance.
+``max_age`` seconds after its time (RangeNoise) and only by the track it was solved for (a
+reopened number drops it); it must be converged (002's stop rule); its [theta, omega] at
+t0 must agree with the track's estimate there (chi-square 99.7 %, 2 dof), so a solution of
+another contact fails; the predicted bearing sigma must be at most MAX_SIGMA. In case 1
+the solution gives the curvature only, never the track's bearing or rate, and a detection
+must still pass the 000 gate with the predicted covariance.
 """
 
 from __future__ import annotations

@@ -13,8 +13,10 @@ time only:
      frozen tracks whose order is sure is released for the scan (deviation;
      common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
-     common.sonar.bearing.range_noise and, near a closest approach, its bearing and
-     bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
+     common.sonar.bearing.range_noise and its bearing and bearing rate along the
+     solution's relative track (observable range) or, near a closest approach, from the
+     solution itself (common.sonar.bearing.tma_prediction, both models); a number reopened
+     for a new track drops its hint;
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
      5b. with `block_estimator`, a track whose 004 flag clears resumes from the line 004's
