@@ -92,3 +92,19 @@ def test_close_approach_with_a_turn_fast_subset(mode: str) -> None:
         r = run_once(REPO / "scenarios" / "sonar_cpa_fine_1km_turn.toml", seed, mode)
         assert r.numbers == 1 and r.held >= 0.9 and r.solved_after
         assert r.err <= 5.0 * r.crlb and r.nees < 30.0
+
+
+def test_the_benchmark_checks_range_observable_without_a_turn() -> None:
+    """benchmarks/sonar_cpa.py's goals: without an own-ship turn (CRLB infinite) every
+    solution must say range_observable false, with one true; RMS is checked with a turn only."""
+    sys.path.insert(0, str(REPO))
+    from benchmarks.sonar_cpa import CpaRun, summary
+
+    def runs(crlb: float, flag: bool, err: float = 10.0) -> list[CpaRun]:
+        return [CpaRun(1, 1.0, True, err, crlb, 4.0, flag) for _ in range(4)]
+
+    assert summary(runs(math.inf, False, err=1e6))[1]
+    assert not summary(runs(math.inf, True))[1]
+    assert summary(runs(100.0, True))[1]
+    assert not summary(runs(100.0, False))[1]
+    assert not summary(runs(100.0, True, err=1e6))[1]
