@@ -13,7 +13,8 @@ track paired with an aircraft) per 100 aircraft, position RMSE / PCRLB (RMS of t
 error over RMS of sqrt(trace) of the position bound, over the same pairs; the PCRLB is
 common.evaluation.pcrlb.pcrlb with r_b, v_b information of each base's channel, no
 azimuth, scaled per target and time by the radar-equation P_D inside the window:
-common.sim.radar.detection_probability; q, q_z of NetworkParams), mean position NEES
+common.sim.radar.detection_probability, times the number of the base's scans since the
+previous report; q, q_z of NetworkParams), mean position NEES
 and % beyond chi-square(3) 99 %, the fusion centre's CPU per base report and its
 x real time (scene seconds per CPU second). Then the CPU per scene second of each
 service against the number of bases (first n bases of a 16-receiver network,
@@ -136,6 +137,14 @@ def _score(run: Run, g: GlobalTracks, truth: dict[str, Any], held: dict[int, int
     run.pairs += [(g.t, i) for i in ids[r].tolist()]
 
 
+def scans(base_times: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Scans of a base in each interval (t_k-1, t_k] of the report times (K,), all
+    before t_0 in the first: the bound takes one step per report, and a base scans every
+    0.5-1 s, so its information per step is that of this many scans."""
+    edges = np.searchsorted(base_times, times, side="right")
+    return np.diff(edges, prepend=0).astype(float)
+
+
 def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
     """RMSE / PCRLB over the scored pairs (module doc)."""
     times = np.array(sorted(run.truth))
@@ -155,6 +164,7 @@ def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
         r_t = np.linalg.norm(states[..., POS] - b.tx, axis=-1)
         r_r = np.linalg.norm(states[..., POS] - b.rx, axis=-1)
         pd[..., i] = detection_probability(r_t, r_r, ch, radar) * (r_t + r_r <= radar.rb_max)
+        pd[..., i] *= scans(radar.base_times(b.id, run.duration), times)[:, None]
     p = NetworkParams()  # the bound starts from P0 at an aircraft's first report
     J = pcrlb(times, states, present, tx, rx, np.array(info), p.q, p.q_z, P0, pd)
     var = np.trace(J[:, :, POS][:, :, :, POS], axis1=2, axis2=3)
