@@ -98,7 +98,8 @@ def scene() -> tuple[object, list, object]:
     return cfg, cfg.bases, radar
 
 
-def run(name: str, runs: int, duration: float, seed: int) -> dict[str, np.ndarray]:
+def run(name: str, runs: int, duration: float, seed: int,
+        kinds: tuple[str, ...] = UPDATES) -> dict[str, np.ndarray]:
     """Per update kind: rows (RMSE / PCRLB, z RMSE, z sigma, z bound, NEES, % > 99)."""
     _, bases, radar = scene()
     x0 = AIRCRAFT[name]
@@ -124,7 +125,7 @@ def run(name: str, runs: int, duration: float, seed: int) -> dict[str, np.ndarra
     det = rng.random((len(scans), runs)) < pd_b[[b for _, b in scans]][:, None]
     noise = rng.standard_normal((len(scans), runs, 2)) * sig[[b for _, b in scans]][:, None]
     out = {}
-    for kind in UPDATES:
+    for kind in kinds:
         x, P, t = start.copy(), np.repeat(B[k0][None], runs, axis=0), times[k0]
         err, cov, idx = [], [], []
         for k in range(k0, len(scans)):
