@@ -2,6 +2,7 @@
 
 Run: PYTHONPATH=. .venv/bin/python benchmarks/network_goals.py [--scenes 300 1000]
      [--seeds 1 2 3 4 5] [--duration 120] [--warm-up 30] [--scale-bases 4 8 16 32]
+     [--per-aircraft N]
 
 The in-process chain (simulator -> every base's channel plotter and elementary tracker
 -> the network fusion core, the parts of common.wire.radar_chain.RadarChain) on the
@@ -19,7 +20,9 @@ and % beyond chi-square(3) 99 %, the fusion centre's CPU per base report and its
 x real time (scene seconds per CPU second). Then the CPU per scene second of each
 service against the number of bases (first n bases of a 16-receiver network,
 --scale-aircraft aircraft, seed 1) with the log-log slope. Exits 1 when a goal fails.
---pd-model fixed runs the goal scenes with Bernoulli(pd) detection instead (comparison).
+--pd-model fixed runs the goal scenes with Bernoulli(pd) detection instead (comparison);
+--per-aircraft N lists after each row the N aircraft of largest share of the squared
+error (RMSE against the bound, in z, NEES, outside the sites' hull or not).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import Delaunay
 from scipy.stats import chi2
 
 REPO = Path(__file__).resolve().parents[1]
@@ -73,6 +77,8 @@ class Run:
     err2: list[float] = field(default_factory=list)
     nees: list[float] = field(default_factory=list)
     pairs: list[tuple[float, int]] = field(default_factory=list)  # t, truth id of err2 rows
+    ez: list[float] = field(default_factory=list)  # z error of err2 rows
+    sz2: list[float] = field(default_factory=list)  # the track's z variance of err2 rows
     truth: dict[float, np.ndarray] = field(default_factory=dict)  # report t -> rows [id, state]
 
 
@@ -133,6 +139,8 @@ def _score(run: Run, g: GlobalTracks, truth: dict[str, Any], held: dict[int, int
         held[i] = j
     e = x[c][:, POS] - X[r][:, POS]
     run.err2 += np.sum(e**2, axis=1).tolist()
+    run.ez += e[:, 2].tolist()
+    run.sz2 += P[c][:, 4, 4].tolist()
     run.nees += quadratic_form(e, P[c][:, POS][:, :, POS]).tolist()
     run.pairs += [(g.t, i) for i in ids[r].tolist()]
 
@@ -147,6 +155,12 @@ def scans(base_times: np.ndarray, times: np.ndarray) -> np.ndarray:
 
 def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
     """RMSE / PCRLB over the scored pairs (module doc)."""
+    var, _ = pair_bounds(run, cfg, radar)
+    return float(np.sqrt(np.mean(run.err2)) / np.sqrt(np.mean(var)))
+
+
+def pair_bounds(run: Run, cfg: Config, radar: RadarSim) -> tuple[np.ndarray, np.ndarray]:
+    """Trace of the position PCRLB and its z variance at each scored pair."""
     times = np.array(sorted(run.truth))
     ids = np.unique(np.concatenate([v[:, 0] for v in run.truth.values()])).astype(int)
     states = np.zeros((times.size, ids.size, 6))
@@ -170,7 +184,30 @@ def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
     var = np.trace(J[:, :, POS][:, :, :, POS], axis1=2, axis2=3)
     k = np.searchsorted(times, [t for t, _ in run.pairs])
     j = np.searchsorted(ids, [i for _, i in run.pairs])
-    return float(np.sqrt(np.mean(run.err2)) / np.sqrt(np.mean(var[k, j])))
+    return var[k, j], J[k, j, 4, 4]
+
+
+def contributors(run: Run, cfg: Config, radar: RadarSim, top: int) -> None:
+    """The `top` aircraft of largest share of the squared error: share, samples, RMSE,
+    PCRLB, z RMSE, the track's z sigma, z PCRLB (RMS over the pairs, m), mean NEES, %
+    beyond 99 %, whether outside the sites' hull in the plane (fraction of the pairs)."""
+    var, varz = pair_bounds(run, cfg, radar)
+    ids = np.array([i for _, i in run.pairs])
+    err2, ez, sz2, nees = (np.array(v) for v in (run.err2, run.ez, run.sz2, run.nees))
+    pos = np.array([run.truth[t][run.truth[t][:, 0] == i][0, [1, 3]] for t, i in run.pairs])
+    sites = np.concatenate([[b.tx[:2] for b in cfg.bases], [b.rx[:2] for b in cfg.bases]])
+    out = Delaunay(sites).find_simplex(pos) < 0
+    rows = []
+    for i in np.unique(ids):
+        m = ids == i
+        rows.append((err2[m].sum() / err2.sum(), i, m.sum(), *np.sqrt([err2[m].mean(), var[m].mean(),
+                     np.mean(ez[m] ** 2), sz2[m].mean(), varz[m].mean()]), nees[m].mean(),
+                     100.0 * np.mean(nees[m] > CHI2_99), out[m].mean()))
+    print(f"  {'share':>5} {'id':>4} {'n':>4} {'rmse':>6} {'pcrlb':>6} {'z rmse':>6} {'z sig':>6} "
+          f"{'z bnd':>6} {'nees':>6} {'>99 %':>6} {'out':>4}")
+    for r in sorted(rows, reverse=True)[:top]:
+        print(f"  {r[0]:>5.2f} {r[1]:>4d} {r[2]:>4d} " + " ".join(f"{v:>6.0f}" for v in r[3:8])
+              + f" {r[8]:>6.1f} {r[9]:>6.1f} {r[10]:>4.1f}")
 
 
 def goals(args: argparse.Namespace) -> bool:
@@ -195,6 +232,8 @@ def goals(args: argparse.Namespace) -> bool:
             print(f"{name:>5} {seed:>4} {len(cfg.bases):>5} {missed:>8.2f} {false:>7.2f} {sw:>6.1f} "
                   f"{ratio:>10.2f} {nees:>6.2f} {beyond:>6.2f} {1e3 * fus / max(run.base_reports, 1):>9.2f} "
                   f"{run.duration / max(fus, 1e-9):>6.1f}", flush=True)
+            if args.per_aircraft and run.err2:
+                contributors(run, cfg, radar, args.per_aircraft)
             ok &= bool(missed < 1 and false < 1 and sw < 1 and ratio <= 1.3 and nees <= 4.5 and beyond < 2)
     return ok
 
@@ -224,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--warm-up", type=float, default=30.0)
     ap.add_argument("--pd-model", choices=PD_MODELS, default="snr",
                     help="detection model of the goal scenes (fixed: pd alone, for comparison)")
+    ap.add_argument("--per-aircraft", type=int, default=0, metavar="N",
+                    help="after each row, the N aircraft of largest share of the squared error")
     ap.add_argument("--scale-bases", type=int, nargs="*", default=[4, 8, 16, 32])
     ap.add_argument("--scale-aircraft", type=int, default=100)
     ap.add_argument("--scale-duration", type=float, default=30.0)

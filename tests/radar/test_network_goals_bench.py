@@ -16,12 +16,15 @@ from common.sim.scenario import load_scenario
 def test_goals_benchmark_runs(capsys: pytest.CaptureFixture[str]) -> None:
     code = network_goals.main(["--scenes", "5", "--seeds", "1", "--duration", "20", "--warm-up", "10",
                                "--scale-bases", "4", "8", "--scale-aircraft", "3",
-                               "--scale-duration", "5"])
+                               "--scale-duration", "5", "--per-aircraft", "2"])
     out = capsys.readouterr().out
     assert code in (0, 1)
     assert "rmse/pcrlb" in out and "slope" in out
     row = next(line.split() for line in out.splitlines() if line.split()[:2] == ["5", "1"])
     assert len(row) == 11 and row[2] == "21"
+    lines = out.splitlines()
+    head = next(k for k, line in enumerate(lines) if line.split()[:2] == ["share", "id"])
+    assert len(lines[head + 1].split()) == 11 and len(lines[head + 2].split()) == 11
     assert out.strip().endswith("met" if code == 0 else "FAILED")
 
 
