@@ -164,3 +164,24 @@ def test_reference_clocks_are_trusted_and_unknown_ones_refused() -> None:
     assert np.flatnonzero(fusion.clocks.reference).tolist() == [2]
     with pytest.raises(ValueError, match="nobase"):
         NetworkFusion(bases, NetworkParams(clock_reference=("nobase",)))
+
+
+def test_applied_offsets_have_mean_zero_without_a_reference() -> None:
+    """[C4]: without a reference base the common part of the estimates (unobservable) is
+    not applied: the offsets applied to the reports have mean 0; with a reference every
+    estimate is applied as it is."""
+    from common.radar.network.clocks import Clocks
+
+    v, S = np.array([200.0, -150.0, 90.0]), np.full(3, 25.0)
+    for reference in (np.zeros(3, dtype=bool), np.array([True, False, False])):
+        clocks = Clocks(3, 0.1, 1e-6, reference)
+        for b, y in ((0, 8.0), (1, 5.0), (2, 3.0)):
+            clocks.update(b, 1.0, v, np.full(3, y), S)
+        applied = np.array([clocks.applied(b) for b in range(3)])
+        z, R = np.array([[1e5, 200.0]]), np.diag([25.0, 1.0])[None]
+        shifted = np.array([clocks.correct(b, z, R)[0][0, 0] for b in range(3)]) - 1e5
+        assert np.allclose(shifted, 200.0 * applied)
+        if reference.any():
+            assert np.array_equal(applied, clocks.c)
+        else:
+            assert abs(applied.sum()) < 1e-12 and abs(clocks.c.sum()) > 1e-3
