@@ -45,8 +45,8 @@ def row(n: int, cells: int, rng: np.random.Generator, p: NetworkParams) -> str:
     lo = np.r_[sites[:, :2].min(axis=0) - p.volume_margin, p.z_min]
     hi = np.r_[sites[:, :2].max(axis=0) + p.volume_margin, p.z_max]
     size = p.cell_coarse / 2 ** 5
-    at, _ = votes(pos, size, shells, tx, rx, rec.ravel())
-    rand, _ = votes(lo + rng.random((cells, 3)) * (hi - lo), size, shells, tx, rx, rec.ravel())
+    at, *_ = votes(pos, size, shells, tx, rx, rec.ravel())
+    rand, *_ = votes(lo + rng.random((cells, 3)) * (hi - lo), size, shells, tx, rx, rec.ravel())
     return (f"| {n} | {at.mean():.1f} of {len(cfg.bases)} | {rand.mean():.1f} | {np.mean(rand >= 6):.2f} | "
             f"{np.mean(rand >= 15):.4f} | {np.prod((hi - lo) / size):.2e} of {size:.0f} m |")
 
