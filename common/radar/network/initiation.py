@@ -3,11 +3,15 @@
 One round at time t, from the leftovers' [r_b, v_b] predicted to t:
 
 1. seed cells: coarse-to-fine voting of the leftovers' ellipsoidal shells in the
-   surveillance volume ([V] of `voting`), the most voted cells first;
-2. per cell and base, the leftover whose r_b is closest to the cell centre's r_b
-   within k sigma_r plus the cell's range margin; cells with fewer than `required`
-   bases are dropped (ghosts: an exactly determined triple is always consistent,
-   over-determination is what tells them apart), identical member sets kept once;
+   surveillance volume ([V] of `voting`), and at the cells no larger than doppler_cell
+   the velocity vote of their candidates' range rates ([D] of `velocity_vote`, 001 [2]),
+   the best cells first;
+2. members: per cell and base the candidate agreeing with the cell's velocity ([D]);
+   with range votes alone (doppler_cell = 0) the leftover whose r_b is closest to the
+   cell centre's r_b within k sigma_r plus the cell's range margin. Cells with fewer than
+   `required` bases are dropped (ghosts: an exactly determined triple is always
+   consistent, over-determination is what tells them apart), identical member sets kept
+   once;
 3. `localise` ([GN], [LS], [FIM]) on all members from the cell centre and from its
    (x, y) at each altitude of seed_z (least cost wins: the altitude valley of far
    bases has local minima), a re-gate of
@@ -147,8 +151,7 @@ def accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: Netw
 def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, turn: int = 0
              ) -> tuple[Opened, int]:
     """Steps 1-4 in round `turn`: the accepted candidates, and the number of seed cells
-    left for a later round (max_cells at the finest level)."""
-    B = sites.tx.shape[0]
+    left for a later round (beyond max_cells, or doppler_cells / 8, at the last level)."""
     sigma = np.sqrt(left.R[:, :2, :2].diagonal(axis1=1, axis2=2))
     doppler = Shells(left.base, left.z[:, 0], left.z[:, 1], sigma[:, 0], sigma[:, 1])
     pts, members, cut = vote_cells(left.base, left.z[:, 0], sigma[:, 0], sites.tx, sites.rx,

@@ -43,7 +43,8 @@ class NetworkParams(Params):
         their range votes, down to the last level, whose agreeing candidates are the
         members; 0: range votes only (each base's nearest r_b as member).
     doppler_cells: cells voted on in velocity per level (in the sweep's order; the rest
-        wait); a level refines the best doppler_cells / 8 of them (8 children each).
+        wait); a level keeps the best doppler_cells / 8 of them (refined: 8 children
+        each; seeds at the last level).
     doppler_grid: side of the (vx, vy) grid of the first velocity level.
     doppler_speed: largest horizontal speed of an aircraft (the first grid spans +- it;
         bounds the turn of the range rate over a cell).

@@ -20,11 +20,14 @@ the Weyl sequence visits every block), so a saturated level (dense scenes: every
 crossed by a shell of every base) refines another part of the volume each round and
 reaches all of it within a few tens of rounds.
 
-With the range rates (doppler_cell > 0), the levels of cells no larger than
-doppler_cell rank their cells by the velocity vote [D] of
+With the range rates (doppler_cell > 0), every level ranks its cells by the whole nats
+of the information [I] of their votes (`votes`) rather than their number (in dense
+scenes nearly every cell has every vote, and an aircraft that fewer bases see has fewer
+than a ghost cell), ties in the sweep's order; the levels of cells no larger than
+doppler_cell rank them by the velocity vote [D] of
 common.radar.network.velocity_vote instead: at most `doppler_cells` cells of the range
 floor, in the sweep's order, are voted on; those with >= required agreeing bases are
-kept, the best first (doppler_cells / 8 refined, max_cells at the last level); the
+kept, the best first, at most doppler_cells / 8 (refined, or seeds at the last); the
 first such level votes over every velocity up to doppler_speed on a doppler_grid^2
 grid, the next ones on a LOCAL^2 grid of +- two grid steps around their parent's
 velocity. The last level returns each cell's agreeing candidates as members.
