@@ -13,7 +13,8 @@ up to s_max), the third the vertical speed (the vote is over (vx, vy)). A cell's
 the largest number of bases, each counted once, over >= 2 receivers, with a candidate
 satisfying [D] somewhere in one cell of a grid over (vx, vy): an aircraft's candidates
 agree on its velocity, the candidates of a ghost cell come from different aircraft and
-scatter. Its members are per base the agreeing candidate of least |residual| / tolerance.
+scatter. Its members are per base the agreeing candidate of least (residual /
+tolerance)^2 + (range residual / half-width of [V])^2.
 
 Hough transform on an n x n grid of (vx, vy) per cell: per candidate and grid column
 the rows its strip [D] (widened by the grid cell) crosses, marked in a difference array
@@ -48,7 +49,8 @@ class Shells:
 @dataclass(frozen=True)
 class Candidates:
     """(cell, leftover) pairs sorted by cell: cell (K,), base (K,), leftover (K,), the
-    plane components of g_b at the cell (K, 2), v_b (K,), tolerance of [D] (K,)."""
+    plane components of g_b at the cell (K, 2), v_b (K,), tolerance of [D] (K,), and
+    |r_b(c) - r_b,i| over the half-width of [V] (K,)."""
 
     cell: np.ndarray
     base: np.ndarray
@@ -56,6 +58,7 @@ class Candidates:
     g: np.ndarray
     v: np.ndarray
     tol: np.ndarray
+    dr: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -88,10 +91,11 @@ def candidates(cells: np.ndarray, size: float, sh: Shells, tx: np.ndarray, rx: n
         i = rows[j]
         tol = (k * sh.sigma_v[i] + d * p.doppler_speed * (1 / n_t[c] + 1 / n_r[c])
                + np.abs(u[c, 2]) * p.doppler_vz)
-        parts.append((c, np.full(c.size, b), i, u[c, :2], sh.v[i], tol))
+        dr = np.abs(h[c] - sh.r[i]) / m[c]
+        parts.append((c, np.full(c.size, b), i, u[c, :2], sh.v[i], tol, dr))
     if not parts:
         z = np.zeros(0, dtype=int)
-        return Candidates(z, z, z, np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+        return Candidates(z, z, z, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
     cat = [np.concatenate(x) for x in zip(*parts)]
     order = np.argsort(cat[0], kind="stable")
     return Candidates(*(x[order] for x in cat))
@@ -153,7 +157,7 @@ def vote(cells: np.ndarray, size: float, sh: Shells, tx: np.ndarray, rx: np.ndar
             break
         if a == e:
             continue
-        sub = Candidates(*(getattr(k, f)[a:e] for f in ("cell", "base", "left", "g", "v", "tol")))
+        sub = Candidates(*(getattr(k, f)[a:e] for f in ("cell", "base", "left", "g", "v", "tol", "dr")))
         cell = sub.cell - c0
         counts = _counts(sub, cell, nc, x0[sub.cell], y0[sub.cell], s[sub.cell], n)
         flat = counts.reshape(nc, -1)
@@ -167,13 +171,15 @@ def vote(cells: np.ndarray, size: float, sh: Shells, tx: np.ndarray, rx: np.ndar
 
 def _members(k: Candidates, velocity: np.ndarray, s: np.ndarray, C: int, B: int,
              receiver: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per cell and base the candidate agreeing at the best grid cell of least |residual|
-    / tolerance (C, B), and the receivers with one (C,)."""
+    """Per cell and base the candidate agreeing at the best grid cell of least
+    (residual / tolerance)^2 + dr^2 (C, B) (the range tells apart aircraft flying
+    together), and the receivers with one (C,)."""
     members = np.full((C, B), -1)
     T = k.tol + s[k.cell] / 2 * np.abs(k.g).sum(axis=1)
     res = np.abs((k.g * velocity[k.cell]).sum(axis=1) - k.v) / T
     agree = np.flatnonzero(res <= 1.0)
-    order = agree[np.lexsort((res[agree], k.base[agree], k.cell[agree]))]
+    cost = res ** 2 + k.dr ** 2
+    order = agree[np.lexsort((cost[agree], k.base[agree], k.cell[agree]))]
     c, b = k.cell[order], k.base[order]
     first = np.r_[True, (c[1:] != c[:-1]) | (b[1:] != b[:-1])] if order.size else order > 0
     members[c[first], b[first]] = k.left[order[first]]
