@@ -21,13 +21,17 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from common.radar.network.fusion import NetworkFusion, NetworkReport
-from common.radar.network.params import NetworkParams
-from tests.radar import network_scene as ns
-from tests.radar import partition_run
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from common.radar.network.fusion import NetworkFusion, NetworkReport  # noqa: E402
+from common.radar.network.params import NetworkParams  # noqa: E402
+from tests.radar import network_scene as ns  # noqa: E402
+from tests.radar import partition_run  # noqa: E402
 
 WARM_UP, NEAR = 15.0, 2000.0
 PARAMS = NetworkParams(partitions=("west", "east"), partition_splits=(0.0,), partition_margin=3e3)

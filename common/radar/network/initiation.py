@@ -3,11 +3,15 @@
 One round at time t, from the leftovers' [r_b, v_b] predicted to t:
 
 1. seed cells: coarse-to-fine voting of the leftovers' ellipsoidal shells in the
-   surveillance volume ([V] of `voting`), the most voted cells first;
-2. per cell and base, the leftover whose r_b is closest to the cell centre's r_b
-   within k sigma_r plus the cell's range margin; cells with fewer than `required`
-   bases are dropped (ghosts: an exactly determined triple is always consistent,
-   over-determination is what tells them apart), identical member sets kept once;
+   surveillance volume ([V] of `voting`), and at the cells no larger than doppler_cell
+   the velocity vote of their candidates' range rates ([D] of `velocity_vote`, 001 [2]),
+   the best cells first;
+2. members: per cell and base the candidate agreeing with the cell's velocity ([D]);
+   with range votes alone (doppler_cell = 0) the leftover whose r_b is closest to the
+   cell centre's r_b within k sigma_r plus the cell's range margin. Cells with fewer than
+   `required` bases are dropped (ghosts: an exactly determined triple is always
+   consistent, over-determination is what tells them apart), identical member sets kept
+   once;
 3. `localise` ([GN], [LS], [FIM]) on all members from the cell centre and from its
    (x, y) at each altitude of seed_z (least cost wins: the altitude valley of far
    bases has local minima), a re-gate of
@@ -29,6 +33,7 @@ from common.core.gating import chi2_gate, quadratic_form, window_pairs
 from common.radar.geometry.bistatic import bistatic_range, project, project_jacobian
 from common.radar.network.localise import Fix, localise
 from common.radar.network.params import NetworkParams
+from common.radar.network.velocity_vote import Shells
 from common.radar.network.voting import vote_cells
 
 
@@ -73,6 +78,21 @@ def _closest(pred: np.ndarray, half: np.ndarray, left: Leftovers, rows: np.ndarr
         first = np.r_[True, c[1:] != c[:-1]]
         out[c[first]] = rows[j[first]]
     return out
+
+
+def _nearest_members(pts: np.ndarray, left: Leftovers, sites: Sites, p: NetworkParams
+                     ) -> np.ndarray:
+    """Step 2 by range alone: per cell and base the leftover of nearest r_b (C, B)."""
+    margin = 2 * np.sqrt(3.0) / 2 * p.cell_fine
+    k = np.sqrt(chi2_gate(p.gate_prob, 1))
+    members = np.full((pts.shape[0], sites.tx.shape[0]), -1)
+    for b in range(sites.tx.shape[0]):
+        rows = np.flatnonzero(left.base == b)
+        if rows.size:
+            half = np.full(pts.shape[0], k * np.sqrt(left.R[rows, 0, 0].max()) + margin)
+            members[:, b] = _closest(bistatic_range(pts, sites.tx[b], sites.rx[b]), half,
+                                     left, rows)
+    return members
 
 
 def localise_members(left: Leftovers, sites: Sites, members: np.ndarray, seeds: np.ndarray,
@@ -131,19 +151,14 @@ def accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: Netw
 def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, turn: int = 0
              ) -> tuple[Opened, int]:
     """Steps 1-4 in round `turn`: the accepted candidates, and the number of seed cells
-    left for a later round (max_cells at the finest level)."""
-    B = sites.tx.shape[0]
-    pts, cut = vote_cells(left.base, left.z[:, 0], np.sqrt(left.R[:, 0, 0]), sites.tx,
-                        sites.rx, sites.receiver, required, p, turn)
-    margin = 2 * np.sqrt(3.0) / 2 * p.cell_fine
-    k = np.sqrt(chi2_gate(p.gate_prob, 1))
-    members = np.full((pts.shape[0], B), -1)
-    for b in range(B):
-        rows = np.flatnonzero(left.base == b)
-        if rows.size:
-            half = np.full(pts.shape[0], k * np.sqrt(left.R[rows, 0, 0].max()) + margin)
-            members[:, b] = _closest(bistatic_range(pts, sites.tx[b], sites.rx[b]), half,
-                                     left, rows)
+    left for a later round (beyond max_cells, or doppler_cells / 8, at the last level)."""
+    sigma = np.sqrt(left.R[:, :2, :2].diagonal(axis1=1, axis2=2))
+    doppler = Shells(left.base, left.z[:, 0], left.z[:, 1], sigma[:, 0], sigma[:, 1])
+    pts, members, cut = vote_cells(left.base, left.z[:, 0], sigma[:, 0], sites.tx, sites.rx,
+                                   sites.receiver, required, p, turn,
+                                   doppler if p.doppler_cell > 0 else None)
+    if members is None:
+        members = _nearest_members(pts, left, sites, p)
     keep = (members >= 0).sum(axis=1) >= required
     members, first = np.unique(members[keep], axis=0, return_index=True)
     pts = pts[keep][first]

@@ -49,6 +49,17 @@ class NetworkParams(Params):
     seed_z: altitudes of the extra Gauss-Newton seeds of a seed cell.
     cell_coarse, cell_fine: sides of the first and (at least) the last voting cells.
     max_cells: cells refined per level (most voted first; the rest wait, counted).
+    doppler_cell: largest voting cell at which the cells are ranked by the velocity vote
+        of their candidates' range rates (common.radar.network.velocity_vote) instead of
+        their range votes, down to the last level, whose agreeing candidates are the
+        members; 0: range votes only (each base's nearest r_b as member).
+    doppler_cells: cells voted on in velocity per level (in the sweep's order; the rest
+        wait); a level keeps the best doppler_cells / 8 of them (refined: 8 children
+        each; seeds at the last level).
+    doppler_grid: side of the (vx, vy) grid of the first velocity level.
+    doppler_speed: largest horizontal speed of an aircraft (the first grid spans +- it;
+        bounds the turn of the range rate over a cell).
+    doppler_vz: largest vertical speed (the vote is over (vx, vy)).
     max_sigma: worst position sigma beyond which a fix is degenerate.
     cycle: confirmation cycle.
     confirm_cycles: cycles, each with updates from >= 3 bases over >= 2 receivers, to
@@ -89,6 +100,11 @@ class NetworkParams(Params):
     cell_coarse: float = 10e3
     cell_fine: float = 300.0
     max_cells: int = 20000
+    doppler_cell: float = 1250.0
+    doppler_cells: int = 20000
+    doppler_grid: int = 24
+    doppler_speed: float = 350.0
+    doppler_vz: float = 20.0
     max_sigma: float = 10e3
     cycle: float = 1.0
     confirm_cycles: int = 3
@@ -111,6 +127,8 @@ class NetworkParams(Params):
         "z_min": Range("m", -500.0, 30e3), "z_max": Range("m", 0.0, 30e3, "(]"),
         "volume_margin": non_negative("m"), "seed_z": Range("m", -500.0, 30e3),
         "cell_coarse": positive("m"), "cell_fine": positive("m"), "max_cells": count(1),
+        "doppler_cell": non_negative("m"), "doppler_cells": count(8), "doppler_grid": count(2),
+        "doppler_speed": positive("m/s"), "doppler_vz": non_negative("m/s"),
         "max_sigma": positive("m"), "cycle": positive("s"), "confirm_cycles": count(1),
         "coast": positive("s"), "coast_tentative": positive("s"), "report_period": positive("s"),
         "merge_distance": non_negative("m"),
