@@ -15,6 +15,7 @@ from common.radar.geometry.bistatic import bistatic_range, bistatic_range_rate
 from common.radar.network.initiation import Leftovers, Sites, _nearest_members, initiate
 from common.radar.network.params import NetworkParams
 from common.radar.network.velocity_vote import Shells, vote
+from common.radar.network.voting import vote_cells
 from tests.radar import network_scene as ns
 
 
@@ -100,3 +101,18 @@ def test_dense_snapshot_one_round() -> None:
         assert np.linalg.norm(opened.fix.x[c, [0, 2, 4]] - p0[a[0]]) < 2000.0
         ids.append(int(a[0]))
     assert len(set(ids)) == len(ids) >= 15, ids
+
+
+def test_extent_votes_only_the_slab() -> None:
+    """A partition's initiation (`extent`: x in [-inf, 0)) votes only cells that reach
+    its slab and opens aircraft there; without the slab it opens aircraft on both sides."""
+    left, sites, p0 = _snapshot(40, seed=2)
+    p = NetworkParams(doppler_cells=4000)
+    sigma = np.sqrt(left.R[:, :2, :2].diagonal(axis1=1, axis2=2))
+    pts, _, _ = vote_cells(left.base, left.z[:, 0], sigma[:, 0], sites.tx, sites.rx,
+                           sites.receiver, 6, p, 1, _shells(left), (0, -np.inf, 0.0))
+    assert pts.shape[0] > 0 and (pts[:, 0] < p.cell_coarse).all()
+    whole, _ = initiate(left, sites, 6, p, 1)
+    slab, _ = initiate(left, sites, 6, p, 1, (0, -np.inf, 0.0))
+    assert (whole.fix.x[:, 0] > 0).any() and (whole.fix.x[:, 0] < 0).any()
+    assert slab.fix.x.shape[0] > 0 and (slab.fix.x[:, 0] < p.cell_coarse).all()

@@ -69,8 +69,9 @@ class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
     `waiting` the seed cells deferred by max_cells, `merged` the tracks merged into
     another. Hooks of a partition (common.radar.network.partition): `region(x)` whether
-    a fix may open a track here (None: everywhere), `excluded` the (base, elementary id)
-    pairs held by other partitions, left out of initiation."""
+    a fix may open a track here (None: everywhere), `extent` the slab (cell axis, lo, hi)
+    its initiation votes over (None: the whole volume), `excluded` the (base, elementary
+    id) pairs held by other partitions, left out of initiation."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None,
                  sigma_gamma: float = 5.0, sigma_omega: float = 1e-3) -> None:
@@ -101,6 +102,7 @@ class NetworkFusion:
         self.rounds = 0
         self.merged = 0
         self.region: Callable[[np.ndarray], bool] | None = None
+        self.extent: tuple[int, float, float] | None = None
         self.excluded: set[tuple[int, int]] = set()
 
     def _reject(self, reason: str, detail: str) -> Rejected:
@@ -233,7 +235,8 @@ class NetworkFusion:
             return
         required = max(3, min(self.p.init_bases, with_left.size))
         self.rounds += 1
-        opened, waiting = initiate(left, self.sites, required, self.p, self.rounds)
+        opened, waiting = initiate(left, self.sites, required, self.p, self.rounds,
+                                   self.extent)
         self.waiting += waiting
         for c in range(opened.members.shape[0]):
             x, P = opened.fix.x[c], opened.fix.P[c]

@@ -148,15 +148,16 @@ def accepted(fix: Fix, members: np.ndarray, sites: Sites, required: int, p: Netw
     return fix.ok & (n >= required) & (rec >= 2) & (fix.chi2 <= lim) & (fix.chi2_v <= lim_v)
 
 
-def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, turn: int = 0
-             ) -> tuple[Opened, int]:
+def initiate(left: Leftovers, sites: Sites, required: int, p: NetworkParams, turn: int = 0,
+             extent: tuple[int, float, float] | None = None) -> tuple[Opened, int]:
     """Steps 1-4 in round `turn`: the accepted candidates, and the number of seed cells
-    left for a later round (beyond max_cells, or doppler_cells / 8, at the last level)."""
+    left for a later round (beyond max_cells, or doppler_cells / 8, at the last level);
+    `extent`: the slab of the volume voted (`vote_cells`)."""
     sigma = np.sqrt(left.R[:, :2, :2].diagonal(axis1=1, axis2=2))
     doppler = Shells(left.base, left.z[:, 0], left.z[:, 1], sigma[:, 0], sigma[:, 1])
     pts, members, cut = vote_cells(left.base, left.z[:, 0], sigma[:, 0], sites.tx, sites.rx,
                                    sites.receiver, required, p, turn,
-                                   doppler if p.doppler_cell > 0 else None)
+                                   doppler if p.doppler_cell > 0 else None, extent)
     if members is None:
         members = _nearest_members(pts, left, sites, p)
     keep = (members >= 0).sum(axis=1) >= required

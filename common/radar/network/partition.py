@@ -5,7 +5,8 @@ regions, one per partition, each run by its own `NetworkFusion` over every base'
 elementary tracks. A partition (`Partition`, k of n):
 
 - numbers its tracks k+1, k+1+n, k+1+2n, ...: unique across partitions;
-- opens a track only on a fix inside its region (the `region` hook of NetworkFusion);
+- opens a track only on a fix inside its region (the `region` hook of NetworkFusion),
+  and votes its seed cells only over its region widened by the margin (`extent`);
 - leaves out of its initiation the (base, elementary id) members that the other
   partitions' tracks hold (`claim`, from their published tracks; the `excluded` hook),
   so that an aircraft near a border is not opened twice;
@@ -96,6 +97,8 @@ class Partition:
         self.timeout = params.handover_timeout
         fusion.tracks.striped(self.k + 1, len(params.partitions))
         fusion.region = lambda x: bool(self.regions.index(x) == self.k)
+        fusion.extent = (self.regions.col // 2, float(self.regions.lo[self.k] - self.regions.margin),
+                         float(self.regions.hi[self.k] + self.regions.margin))
         self.pending: dict[int, float] = {}  # number -> message time handed over
         self.claims: dict[str, set[tuple[int, int]]] = {}
         self.counts: Counter[str] = Counter()

@@ -113,13 +113,15 @@ def _doppler_level(cells: np.ndarray, keep: np.ndarray, key: np.ndarray, size: f
 
 def vote_cells(base: np.ndarray, r: np.ndarray, sigma: np.ndarray, tx: np.ndarray,
                rx: np.ndarray, receiver: np.ndarray, required: int, p: NetworkParams,
-               turn: int = 0, doppler: Shells | None = None
+               turn: int = 0, doppler: Shells | None = None,
+               extent: tuple[int, float, float] | None = None
                ) -> tuple[np.ndarray, np.ndarray | None, int]:
     """Leaf cell centres (C, 3) of the leftovers (base (L,), range r (L,), sigma_r (L,)),
     most voted first (ties in the sweep's order of round `turn`), their members (C, B)
     from the velocity vote when `doppler` (the same leftovers with their range rates) is
     given and doppler_cell > 0 (else None), and the number of leaf cells beyond the
-    limits (left for later)."""
+    limits (left for later). `extent` (axis 0 or 1, lo, hi): only the first level's
+    cells that reach lo <= c[axis] < hi are voted (a partition's region)."""
     k = np.sqrt(chi2_gate(p.gate_prob, 1))
     shells = []
     for b in range(tx.shape[0]):
@@ -127,6 +129,9 @@ def vote_cells(base: np.ndarray, r: np.ndarray, sigma: np.ndarray, tx: np.ndarra
         shells.append((np.sort(r[rows]), k * sigma[rows].max(initial=0.0)))
     cells, size = _grid(tx, rx, p), p.cell_coarse
     lo = cells.min(axis=0) - p.cell_coarse / 2
+    if extent is not None:
+        c = cells[:, extent[0]]
+        cells = cells[(c + size / 2 >= extent[1]) & (c - size / 2 < extent[2])]
     window: tuple[np.ndarray, np.ndarray] | None = None
     while True:
         n, n_rec, info = votes(cells, size, shells, tx, rx, receiver)
