@@ -62,7 +62,8 @@ from common.sonar.bearing.model import (
     thresholds,
 )
 from common.sonar.bearing.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
-from common.sonar.bearing.pairs import centroid_update, release
+from common.sonar.bearing.pair_order import PairOrders
+from common.sonar.bearing.pairs import centroid_update, memory_groups, per_track, release
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
 from common.sonar.bearing.tma_prediction import with_bearing
@@ -122,6 +123,7 @@ class BearingTracker:
                           if self.narrowband else None)
         self.history = BearingHistory(p.history_keep_deleted)
         self.range_noise = RangeNoise()
+        self.pair_orders = PairOrders()
         self.t: float | None = None
         self._next_uid = 0
         self._ml_tracks: list[MultiLineTrack] = []
@@ -198,9 +200,14 @@ class BearingTracker:
             keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
                                             rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
-        frozen = np.zeros((0, 2), dtype=np.intp)
-        if self.crossing is not None and self.crossing.memory:  # 004 memory-mode pairs
-            released, frozen = release(conf & ambiguous, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+        frozen: list[np.ndarray] = []
+        if self.crossing is not None and self.crossing.memory:  # 004 memory-mode groups
+            groups = memory_groups(self.crossing.groups, x[:, 0], conf & ambiguous)
+            det = per_track(idx.size, rows, z[cols_, 0])
+            self.pair_orders.observe(t, tab.uid[idx], groups, x[:, 0], det)
+            released, frozen = release(groups, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+            released, frozen = self.pair_orders.settle(t, tab.uid[idx], released, frozen, groups, det,
+                                                       per_track(idx.size, rows, Rd[cols_, 0]))
             alpha[released] = 1.0
         R = diagonal_covariances(Rd[cols_])
 
@@ -212,7 +219,7 @@ class BearingTracker:
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
 
-        if frozen.size:  # the frozen pairs' centroids (common.sonar.bearing.pairs)
+        if frozen:  # the frozen groups' centroids (common.sonar.bearing.pairs)
             x, P = self._centroids(idx, frozen, x, P, rows, z[cols_, 0], Rd[cols_, 0])
         if self.blocks is not None:  # 004 eq. 6-10 (common.sonar.bearing.block)
             self._block_exits(t, idx, conf, ambiguous, x, P, z[:, 0], Rd[:, 0])
@@ -250,12 +257,12 @@ class BearingTracker:
         self.t = t
         return self._cycle(t, live)
 
-    def _centroids(self, idx: np.ndarray, pairs: np.ndarray, x: np.ndarray, P: np.ndarray,
+    def _centroids(self, idx: np.ndarray, groups: list[np.ndarray], x: np.ndarray, P: np.ndarray,
                    rows: np.ndarray, zb: np.ndarray, rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """x, P after the common-mode update of the frozen pairs (per IMM model)."""
+        """x, P after the common-mode update of the frozen groups (per IMM model)."""
         tab, imm = self.table, self.imm is not None
         xm, Pm = (tab.xm[idx], tab.Pm[idx]) if imm else (x[:, None].copy(), P[:, None].copy())
-        centroid_update(pairs, rows, zb, rb, xm, Pm)
+        centroid_update(groups, rows, zb, rb, xm, Pm)
         if not imm:
             return xm[:, 0], Pm[:, 0]
         tab.xm[idx], tab.Pm[idx] = xm, Pm
