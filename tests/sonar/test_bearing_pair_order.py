@@ -30,26 +30,27 @@ def crossing_pair(until: float) -> PairOrders:
 
 def test_a_pair_whose_separations_closed_and_opened_again_has_crossed() -> None:
     po = crossing_pair(400.0)
-    assert po.order(400.0, 10, 11) == 1.0 and po.order(400.0, 11, 10) == -1.0
-    assert crossing_pair(120.0).order(120.0, 10, 11) == -1.0  # still closing: the entry order
-    assert crossing_pair(185.0).order(185.0, 10, 11, crossed_only=True) == 0.0  # apex not yet sure
+    assert po.order(10, 11) == 1.0 and po.order(11, 10) == -1.0
+    assert crossing_pair(120.0).order(10, 11) == 0.0  # still closing: nothing decided
+    assert crossing_pair(185.0).order(10, 11) == 0.0  # one separation after the apex: not yet sure
+    assert crossing_pair(200.0).order(10, 11) == 1.0
 
 
 def test_resolved_detections_in_the_order_of_the_v_release_the_pair() -> None:
     po = crossing_pair(400.0)
     var = np.full(2, DEG**2)
     none = np.zeros(2, dtype=bool)
-    rel, kept = po.settle(400.0, UIDS, none, PAIR, PAIR, np.radians([93.0, 87.0]), var)
+    rel, kept = po.settle(UIDS, none, PAIR, np.radians([93.0, 87.0]), var)
     assert rel.all() and kept == []
-    rel, kept = po.settle(400.0, UIDS, none, PAIR, PAIR, np.radians([87.0, 93.0]), var)
+    rel, kept = po.settle(UIDS, none, PAIR, np.radians([87.0, 93.0]), var)
     assert not rel.any() and len(kept) == 1  # against the V
-    rel, _ = po.settle(400.0, UIDS, none, PAIR, PAIR, np.radians([90.6, 89.4]), var)
+    rel, _ = po.settle(UIDS, none, PAIR, np.radians([90.6, 89.4]), var)
     assert not rel.any()  # not resolved (1.2 deg < 3 x 1.41 deg)
 
 
 def test_a_release_by_the_prediction_against_the_v_is_kept_frozen() -> None:
     po = crossing_pair(400.0)
-    rel, kept = po.settle(400.0, UIDS, np.ones(2, dtype=bool), [], PAIR, np.radians([88.0, 92.0]),
+    rel, kept = po.settle(UIDS, np.ones(2, dtype=bool), PAIR, np.radians([88.0, 92.0]),
                           np.full(2, DEG**2))
     assert not rel.any() and len(kept) == 1
 

@@ -4,15 +4,21 @@ common.sonar.bearing.tracker; common.core.crossing_groups).
 A frozen pair (a group of two tracks of common.sonar.bearing.pairs) coasts on 004's
 memory: its difference on the bearing rates it entered with. When those rates are off
 (a young track, a third contact in the crossing), the extrapolated pair stays between the
-two contacts long after they separated, and the order of its tracks is not sure. Its
-detections, once resolved (at least SIGN_SIGMAS sigma apart: var R_a + R_b), are either
-in the pair's order or exchanged; which, follows from whether the pair has crossed:
+two contacts long after they separated, and the order its prediction gives is not
+sure, or wrong. Whether the contacts have crossed follows from their detections:
 `common.core.crossing_groups.crossing_time` fits the V of the separations |X_a - X_b| of
-every scan since the pair was first frozen (and its predicted separation then), and the
-pair's order at t is its entry order if t_c > t, the reverse otherwise. When GNN gave
-the tracks their detections in that order, both are released for the scan (alpha = 1,
-as common.sonar.bearing.pairs releases a pair whose predicted order is sure).
-Deviation (not in 004; stated in common.core.crossing_groups).
+the scans where the pair was a group of two with a detection each (and its predicted
+separation when it was first frozen); once the V's apex is followed by MIN_AFTER
+separations the pair has crossed, and its order is the reverse of its order then. Two
+uses (`PairOrders.settle`):
+- detections resolved (at least SIGN_SIGMAS sigma apart, var R_a + R_b) that GNN gave the
+  tracks in that order release the pair for the scan (alpha = 1, as
+  common.sonar.bearing.pairs releases a group whose predicted order is sure);
+- a group that common.sonar.bearing.pairs would release in an order against a crossed
+  pair's V stays frozen (a prediction that has not crossed, on rates that are off).
+Before its apex is sure the V decides nothing: taken as "not crossed yet", it released a
+pair in the wrong order on sonar_x_turn (the own-ship turn bends both rates) and withheld
+right releases on sonar_x_amp. Deviations, not in 004 (common.core.crossing_groups).
 """
 
 from __future__ import annotations
@@ -71,41 +77,40 @@ class PairOrders:
         self.episodes = {k: v for k, v in self.episodes.items()
                          if k[0] in alive and k[1] in alive and t - v.seen <= RETAIN_S}
 
-    def order(self, t: float, uid_a: int, uid_b: int, crossed_only: bool = False) -> float:
-        """The sign of b_a - b_b at t from the pair's V (+-1): reversed when its apex is
-        followed by MIN_AFTER samples, kept when the apex is after the last sample (unless
-        crossed_only), else 0 (unknown; also without an episode)."""
+    def order(self, uid_a: int, uid_b: int) -> float:
+        """The sign of b_a - b_b once the pair has crossed: the reverse of its entry order
+        when the apex of its V is followed by MIN_AFTER separations; 0 otherwise (not
+        crossed, not yet sure, or no episode)."""
         key = (uid_a, uid_b) if uid_a < uid_b else (uid_b, uid_a)
         ep = self.episodes.get(key)
         if ep is None:
             return 0.0
         tc, _ = crossing_time(ep.t, ep.a)
-        after = sum(1 for ts in ep.t if ts > tc)
-        if np.isnan(tc) or (after and after < MIN_AFTER) or tc < ep.t[0] or (crossed_only and not after):
+        if np.isnan(tc) or tc < ep.t[0] or sum(1 for ts in ep.t if ts > tc) < MIN_AFTER:
             return 0.0
-        s = -ep.sign if after else ep.sign
-        return s if key == (uid_a, uid_b) else -s
+        return -ep.sign if key == (uid_a, uid_b) else ep.sign
 
-    def agrees(self, t: float, uids: np.ndarray, g: np.ndarray, det_brg: np.ndarray) -> bool:
+    def agrees(self, uids: np.ndarray, g: np.ndarray, det_brg: np.ndarray) -> bool:
         """True when the detections of the group g (det_brg (N,)) are in the order of every
         pair's V that has crossed."""
         for x, i in enumerate(g):
             for j in g[x + 1:]:
-                s = self.order(t, int(uids[i]), int(uids[j]), crossed_only=True)
+                s = self.order(int(uids[i]), int(uids[j]))
                 if s and np.sign(wrap_pi(det_brg[i] - det_brg[j])) != s:
                     return False
         return True
 
-    def settle(self, t: float, uids: np.ndarray, released: np.ndarray, kept: list[np.ndarray],
-               groups: list[np.ndarray], det_brg: np.ndarray, det_var: np.ndarray
-               ) -> tuple[np.ndarray, list[np.ndarray]]:
-        """The released mask (N,) and the groups kept frozen after the pairs' V: a group
-        released by common.sonar.bearing.pairs whose detections are against a pair's V
-        stays frozen; a kept pair whose detections are resolved (SIGN_SIGMAS sigma of
-        var R_a + R_b) and in the order of its V is released."""
+    def settle(self, uids: np.ndarray, released: np.ndarray, groups: list[np.ndarray],
+               det_brg: np.ndarray, det_var: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The released mask (N,) and the groups kept frozen after the pairs' V, from the
+        mask of common.sonar.bearing.pairs.release, the frozen groups and the bearing and
+        variance of each track's GNN detection (N,), NaN for none: a group released whose
+        detections are against a crossed pair's V stays frozen; a pair not released whose
+        detections are resolved (SIGN_SIGMAS sigma of var R_a + R_b) and in the order of
+        its crossed V is released."""
         out, still = released.copy(), []
         for g in groups:
-            ok = self.agrees(t, uids, g, det_brg)
+            ok = self.agrees(uids, g, det_brg)
             if out[g].all():
                 if not ok:
                     out[g] = False
@@ -113,7 +118,7 @@ class PairOrders:
                 continue
             i, j = g[0], g[-1]
             dz = abs(float(wrap_pi(det_brg[i] - det_brg[j])))
-            if (g.size == 2 and ok and self.order(t, int(uids[i]), int(uids[j]))
+            if (g.size == 2 and ok and self.order(int(uids[i]), int(uids[j]))
                     and dz >= SIGN_SIGMAS * np.sqrt(det_var[i] + det_var[j])):
                 out[g] = True
             else:

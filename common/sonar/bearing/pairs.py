@@ -70,20 +70,16 @@ def ordered(group: np.ndarray, brg: np.ndarray, P00: np.ndarray, det_brg: np.nda
 
 
 def release(groups: list[np.ndarray], brg: np.ndarray, P00: np.ndarray, rows: np.ndarray,
-            det_brg: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+            det_brg: np.ndarray) -> np.ndarray:
     """The tracks (N,) mask released from the memory mode for this scan (their group's order
-    is known, `ordered`) and the groups that stay frozen, from the frozen groups
-    (`memory_groups`), the predicted bearings brg and variances P00 (N,), and the GNN
-    pairs: track rows and their detections' bearings det_brg."""
+    is known, `ordered`), from the frozen groups (`memory_groups`), the predicted bearings
+    brg and variances P00 (N,), and the GNN pairs: track rows and their detections'
+    bearings det_brg."""
     det = per_track(brg.size, rows, det_brg)
     released = np.zeros(brg.size, dtype=bool)
-    kept = []
     for g in groups:
-        if ordered(g, brg, P00, det):
-            released[g] = True
-        else:
-            kept.append(g)
-    return released, kept
+        released[g] = ordered(g, brg, P00, det)
+    return released
 
 
 def centroid_update(groups: list[np.ndarray], rows: np.ndarray, det_brg: np.ndarray,

@@ -9,13 +9,15 @@ time only:
   4. seed 004 crossing management on the confirmed tracks: alpha as gain weight (in
      memory mode the IMM predicts with its quiet Q, common.sonar.bearing.imm); a track
      leaving the ambiguity keeps its detection only if no other confirmed track's
-     prediction is nearer to it (deviation; common.sonar.bearing.crossing); a pair of
-     frozen tracks whose order is sure is released for the scan (deviation;
-     common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
+     prediction is nearer to it (deviation; common.sonar.bearing.crossing); a group of
+     frozen tracks (004's ambiguity groups) whose order is sure, or a frozen pair whose
+     resolved detections follow the V of its separations, is released for the scan
+     (deviations; common.sonar.bearing.pairs, common.sonar.bearing.pair_order); a track
+     given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
      common.sonar.bearing.range_noise and, near a closest approach, its bearing and
      bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
-  5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
+  5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen groups'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
      5b. with `block_estimator`, a track whose 004 flag clears resumes from the line 004's
      block estimator (eq. 6-10) fitted to the crossing's detections
@@ -205,8 +207,8 @@ class BearingTracker:
             groups = memory_groups(self.crossing.groups, x[:, 0], conf & ambiguous)
             det = per_track(idx.size, rows, z[cols_, 0])
             self.pair_orders.observe(t, tab.uid[idx], groups, x[:, 0], det)
-            released, frozen = release(groups, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
-            released, frozen = self.pair_orders.settle(t, tab.uid[idx], released, frozen, groups, det,
+            released = release(groups, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+            released, frozen = self.pair_orders.settle(tab.uid[idx], released, groups, det,
                                                        per_track(idx.size, rows, Rd[cols_, 0]))
             alpha[released] = 1.0
         R = diagonal_covariances(Rd[cols_])
