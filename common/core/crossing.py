@@ -89,7 +89,9 @@ class CrossingParams(Params):
         contacts crossing at 2-3 deg/min were still unresolved, and the single-hypothesis
         tracker kept swaps unflagged in 12, 14 and 30 runs of 40 on sonar_x_clutter,
         sonar_x_turn and sonar_x_three (0, 0 and 6 with 600 s; benchmarks/sonar_default.py,
-        docs/decisions/023-sonar-defaults.md). The radar tables set their own (10 s, 60 s).
+        docs/decisions/023-sonar-defaults.md; 0 on sonar_x_three with the memory-mode
+        groups of docs/decisions/027-sonar-crossing-groups.md). The radar tables set
+        their own (10 s, 60 s).
     q_prior, q_prior_weight: prior proportion and its weight in pseudo-counts for q.
     q_max: upper clip of q so that r = (1 - q) / c stays positive.
     """
