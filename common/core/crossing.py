@@ -20,6 +20,8 @@ Update weight (Etp2), selectable by `CrossingParams.mode`:
 A track ambiguous for longer than `max_duration` is treated as not ambiguous
 (004 claim 6) until its test turns negative again, which re-arms the clock.
 The returned flag is the ambiguity state to publish with each track (Etp3, claim 2).
+Groups (`CrossingManager.groups`): the tracks linked by a term of the test that alone
+makes one of them ambiguous (common.core.crossing_groups: 004's pair, generalised).
 
 Mapping of the recursive filter of eq. 11 onto the shared Kalman core:
 eq. 11 updates the prediction (C + A dt, A) by alpha M_1 g'(nu) and alpha M_2 g'(nu),
@@ -65,6 +67,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from common.core.angles import wrap_pi
+from common.core.crossing_groups import ambiguity_groups
 from common.core.params import PROB_OPEN, Params, Range, non_negative, positive
 
 DENSITY_CUTOFF = 1e-12  # g terms below this fraction of their peak g_j(0) are dropped
@@ -86,7 +89,9 @@ class CrossingParams(Params):
         contacts crossing at 2-3 deg/min were still unresolved, and the single-hypothesis
         tracker kept swaps unflagged in 12, 14 and 30 runs of 40 on sonar_x_clutter,
         sonar_x_turn and sonar_x_three (0, 0 and 6 with 600 s; benchmarks/sonar_default.py,
-        docs/decisions/023-sonar-defaults.md). The radar tables set their own (10 s, 60 s).
+        docs/decisions/023-sonar-defaults.md; 0 on sonar_x_three with the memory-mode
+        groups of docs/decisions/027-sonar-crossing-groups.md). The radar tables set
+        their own (10 s, 60 s).
     q_prior, q_prior_weight: prior proportion and its weight in pseudo-counts for q.
     q_max: upper clip of q so that r = (1 - q) / c stays positive.
     """
@@ -177,21 +182,22 @@ def near_pairs(
     return k[keep], j[keep], d[keep]
 
 
-def neighbour_sum(
+def pair_terms(
     points: np.ndarray,
     z_pred: np.ndarray,
     cov: ArrayLike,
     q: np.ndarray,
     angle_idx: Sequence[int] = (),
-) -> np.ndarray:
-    """sum_{j != k} q^j g_j(points_k - Z^j), shape (N,): the sums of 004 eq. 12 and 13.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The terms q^j g_j(points_k - Z^j) of the sums of 004 eq. 12 and 13, as pairs (k, j)
+    and their values w (P,).
 
     g_j is the zero-mean Gaussian density of covariance cov[j] (the track whose points
     would be mistaken for k's, as g(X - C^j) in 004 eq. 12).
-    Deviation (speed): the sum runs over the pairs of `near_pairs` with radius
-    CUTOFF_RADIUS only. A dropped pair has |d_p| > CUTOFF_RADIUS sigma_j,p on some
-    component, hence d' cov_j^-1 d > CUTOFF_RADIUS^2 (the box bounds the ellipsoid),
-    and its term is below DENSITY_CUTOFF q^j g_j(0).
+    Deviation (speed): only the pairs of `near_pairs` with radius CUTOFF_RADIUS. A dropped
+    pair has |d_p| > CUTOFF_RADIUS sigma_j,p on some component, hence
+    d' cov_j^-1 d > CUTOFF_RADIUS^2 (the box bounds the ellipsoid), and its term is
+    below DENSITY_CUTOFF q^j g_j(0).
     """
     pts = None if points is z_pred else np.asarray(points, dtype=float)  # eq. 13: symmetric
     z_pred = np.asarray(z_pred, dtype=float)
@@ -201,13 +207,43 @@ def neighbour_sum(
     inv = np.linalg.inv(c)
     norm = np.sqrt((2.0 * np.pi) ** m * np.linalg.det(c))
     d2 = np.einsum("pa,pab,pb->p", d, inv[j], d)
-    w = np.asarray(q, dtype=float)[j] * np.exp(-0.5 * d2) / norm[j]
-    return np.bincount(k, weights=w, minlength=n)
+    return k, j, np.asarray(q, dtype=float)[j] * np.exp(-0.5 * d2) / norm[j]
+
+
+def neighbour_sum(
+    points: np.ndarray,
+    z_pred: np.ndarray,
+    cov: ArrayLike,
+    q: np.ndarray,
+    angle_idx: Sequence[int] = (),
+) -> np.ndarray:
+    """sum_{j != k} q^j g_j(points_k - Z^j), shape (N,): the sums of 004 eq. 12 and 13
+    (the terms of `pair_terms`)."""
+    k, _, w = pair_terms(points, z_pred, cov, q, angle_idx)
+    return np.bincount(k, weights=w, minlength=np.shape(z_pred)[0])
 
 
 def far_density(q: np.ndarray, volume: float) -> np.ndarray:
     """r^k = q''^k / c with q''^k = 1 - q^k (004 eq. 10 text, eq. 13)."""
     return (1.0 - q) / volume
+
+
+def eq13_test(
+    z_pred: np.ndarray,
+    cov: ArrayLike,
+    q: np.ndarray,
+    volume: float,
+    epsilon: float,
+    angle_idx: Sequence[int] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Ambiguity flags (N,) of `eq13_ambiguous` and the links (k, j): the pairs whose one
+    term makes k ambiguous, q^j g(Z^k - Z^j) >= eps r^k (004 eq. 13 with j the closest
+    neighbour of 004's model, the "pista cercana" of eq. 2)."""
+    k, j, w = pair_terms(z_pred, z_pred, cov, q, angle_idx)
+    bound = epsilon * far_density(q, volume)
+    lhs = np.bincount(k, weights=w, minlength=np.shape(z_pred)[0])
+    link = w >= bound[k]
+    return ~(lhs < bound), k[link], j[link]  # 004 eq. 13
 
 
 def eq13_ambiguous(
@@ -222,8 +258,18 @@ def eq13_ambiguous(
 
     004 eq. 13, with Z the predictions at t_l and r from `far_density`.
     """
-    lhs = neighbour_sum(z_pred, z_pred, cov, q, angle_idx)
-    return ~(lhs < epsilon * far_density(q, volume))  # 004 eq. 13
+    return eq13_test(z_pred, cov, q, volume, epsilon, angle_idx)[0]
+
+
+def supnorm_test(
+    z_pred: np.ndarray, cov: ArrayLike, S: float, angle_idx: Sequence[int] = ()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Ambiguity flags (N,) of `supnorm_ambiguous` and the links (k, j): the pairs with
+    ||Z^k - Z^j|| <= S."""
+    z_pred = np.asarray(z_pred, dtype=float)
+    n, m = z_pred.shape
+    k, j, _ = near_pairs(z_pred, _sigmas(cov, n, m), S, angle_idx)
+    return np.bincount(k, minlength=n) > 0, k, j
 
 
 def supnorm_ambiguous(
@@ -235,10 +281,7 @@ def supnorm_ambiguous(
     density g of track j (004, sup-norm alternative to eq. 13). The pairs with
     ||Z^k - Z^j|| <= S are exactly those of `near_pairs` with radius S.
     """
-    z_pred = np.asarray(z_pred, dtype=float)
-    n, m = z_pred.shape
-    k, _, _ = near_pairs(z_pred, _sigmas(cov, n, m), S, angle_idx)
-    return np.bincount(k, minlength=n) > 0
+    return supnorm_test(z_pred, cov, S, angle_idx)[0]
 
 
 def progressive_weight(
@@ -265,7 +308,9 @@ class CrossingManager:
     """Per-track ambiguity clocks and point counts of one tracker (seed 004, Etp1-Etp3).
 
     State is keyed by track number: ambiguity start time (NaN when not ambiguous),
-    number of associated measurements and number of measurements seen.
+    number of associated measurements and number of measurements seen; `groups` holds
+    the group labels (`ambiguity_groups` of the test's links) of the tracks of the last
+    step, in their order.
     """
 
     def __init__(self, params: CrossingParams | None = None) -> None:
@@ -274,6 +319,7 @@ class CrossingManager:
         self._start = np.empty(0)
         self._hits = np.empty(0)
         self._seen = np.empty(0)
+        self.groups = np.empty(0, dtype=np.intp)  # `ambiguity_groups` of the last step
 
     def _rows(self, ids: np.ndarray) -> np.ndarray:
         """Row index of each id in the state arrays, adding new ids."""
@@ -312,9 +358,10 @@ class CrossingManager:
         rows = self._rows(ids)
         q = proportions(self._hits[rows], self._seen[rows], p.q_prior, p.q_prior_weight, p.q_max)
         if p.method == "eq13":
-            raw = eq13_ambiguous(z_pred, cov, q, p.volume, p.epsilon, angle_idx)
+            raw, k, j = eq13_test(z_pred, cov, q, p.volume, p.epsilon, angle_idx)
         else:
-            raw = supnorm_ambiguous(z_pred, cov, p.S, angle_idx)
+            raw, k, j = supnorm_test(z_pred, cov, p.S, angle_idx)
+        self.groups = ambiguity_groups(ids.size, k, j)
 
         start = self._start[rows]
         start = np.where(raw, np.where(np.isnan(start), t, start), np.nan)

@@ -1,4 +1,4 @@
-"""common.sonar.bearing.pairs: the pairs of 004's memory mode, the release of a pair whose
+"""common.sonar.bearing.pairs: the groups of 004's memory mode, the release of a group whose
 order is known, the centroid measurement and the common-mode update; and, through the
 single-hypothesis tracker, crossings that swapped before the rule."""
 
@@ -12,9 +12,9 @@ import pytest
 from benchmarks import mht as MH
 from benchmarks import sonar_hold as SH
 from common.sonar.bearing.pairs import (
-    centroid_measurements,
+    centroid_measurement,
     common_mode_update,
-    memory_pairs,
+    memory_groups,
     ordered,
     release,
 )
@@ -22,69 +22,84 @@ from common.sonar.bearing.pairs import (
 DEG = math.radians(1.0)
 
 
-def test_pairs_are_mutual_nearest_frozen_neighbours() -> None:
-    brg = np.radians([10.0, 10.5, 20.0, 10.2, 21.0])
-    frozen = np.array([True, True, True, False, True])
-    pairs = memory_pairs(brg, np.full(5, DEG**2), frozen)
-    assert sorted(map(tuple, pairs.tolist())) == [(0, 1), (2, 4)]  # 3 is not frozen
-    assert memory_pairs(brg, np.full(5, DEG**2), np.array([True, False, False, False, False])).size == 0
+def test_groups_are_the_frozen_tracks_of_one_ambiguity_group_in_bearing_order() -> None:
+    brg = np.radians([10.5, 10.0, 20.0, 10.2, 21.0, 359.0, 1.0])
+    labels = np.array([0, 0, 1, 0, 1, 2, 2])
+    frozen = np.array([True, True, True, False, True, True, True])
+    groups = memory_groups(labels, brg, frozen)
+    assert [g.tolist() for g in groups] == [[1, 0], [2, 4], [5, 6]]  # 3 is not frozen; 359 < 1
+    assert memory_groups(labels, brg, np.array([True] + [False] * 6)) == []
 
 
 def test_the_order_is_known_only_when_the_prediction_is_sure_of_it_and_the_detections_agree() -> None:
-    pairs = np.array([[0, 1]])
+    pair = np.array([1, 0])  # in bearing order
     brg = np.radians([92.0, 88.0])  # 4 deg apart
     small = np.full(2, (0.5 * DEG) ** 2)  # sigma of the difference 0.71 deg: 5.7 sigma
-    assert ordered(pairs, brg, small, np.radians([93.0, 87.5]))[0]
-    assert not ordered(pairs, brg, small, np.radians([87.5, 93.0]))[0]  # exchanged
-    assert not ordered(pairs, brg, small, np.array([np.radians(93.0), np.nan]))[0]  # one detection
+    assert ordered(pair, brg, small, np.radians([93.0, 87.5]))
+    assert not ordered(pair, brg, small, np.radians([87.5, 93.0]))  # exchanged
+    assert not ordered(pair, brg, small, np.array([np.radians(93.0), np.nan]))  # one detection
     wide = np.full(2, (1.0 * DEG) ** 2)  # sigma 1.41 deg: 2.8 sigma
-    assert not ordered(pairs, brg, wide, np.radians([93.0, 87.5]))[0]
+    assert not ordered(pair, brg, wide, np.radians([93.0, 87.5]))
 
 
-def test_release_frees_both_tracks_of_an_ordered_pair_and_keeps_the_others_frozen() -> None:
+def test_a_group_of_three_is_ordered_only_when_every_neighbour_pair_is() -> None:
+    brg = np.radians([88.0, 92.0, 96.0])
+    small = np.full(3, (0.5 * DEG) ** 2)
+    g = np.array([0, 1, 2])
+    assert ordered(g, brg, small, np.radians([87.5, 92.5, 95.0]))
+    assert not ordered(g, brg, small, np.radians([87.5, 95.0, 92.5]))  # the upper two exchanged
+    assert not ordered(g, np.radians([88.0, 92.0, 93.0]), small, np.radians([87.5, 92.5, 95.0]))
+
+
+def test_release_frees_every_track_of_an_ordered_group_and_keeps_the_others_frozen() -> None:
     brg = np.radians([92.0, 88.0, 50.0, 50.2])
     P00 = np.full(4, (0.3 * DEG) ** 2)
     rows = np.array([0, 1, 2, 3])
-    released, frozen = release(np.ones(4, dtype=bool), brg, P00, rows, np.radians([92.5, 87.0, 50.3, 50.0]))
+    groups = memory_groups(np.array([0, 0, 1, 1]), brg, np.ones(4, dtype=bool))
+    released = release(groups, brg, P00, rows, np.radians([92.5, 87.0, 50.3, 50.0]))
     assert released.tolist() == [True, True, False, False]
-    assert frozen.tolist() == [[2, 3]]
 
 
-def test_the_centroid_needs_both_detections() -> None:
-    pairs = np.array([[0, 1]])
-    zc, rc, seen = centroid_measurements(pairs, np.radians([91.5, 88.7]), np.full(2, DEG**2))
-    assert seen[0] and math.degrees(zc[0]) == pytest.approx(90.1)
-    assert rc[0] == pytest.approx(DEG**2 / 2.0)  # (R_1 + R_2) / 4
-    assert not centroid_measurements(pairs, np.array([np.nan, np.radians(88.7)]),
-                                     np.array([np.nan, DEG**2]))[2][0]
+def test_the_centroid_needs_every_detection() -> None:
+    zc, rc, seen = centroid_measurement(np.radians([91.5, 88.7]), np.full(2, DEG**2))
+    assert seen and math.degrees(zc) == pytest.approx(90.1)
+    assert rc == pytest.approx(DEG**2 / 2.0)  # (R_1 + R_2) / 4
+    zc, rc, seen = centroid_measurement(np.radians([91.5, 88.7, 90.4]), np.full(3, DEG**2))
+    assert seen and math.degrees(zc) == pytest.approx(90.2) and rc == pytest.approx(DEG**2 / 3.0)
+    assert not centroid_measurement(np.array([np.nan, np.radians(88.7)]), np.array([np.nan, DEG**2]))[2]
 
 
 def test_at_360_the_centroid_wraps() -> None:
-    zc, _, _ = centroid_measurements(np.array([[0, 1]]), np.radians([359.5, 0.7]), np.full(2, DEG**2))
-    assert math.degrees(zc[0]) == pytest.approx(0.1)
+    zc, _, _ = centroid_measurement(np.radians([359.5, 0.7]), np.full(2, DEG**2))
+    assert math.degrees(zc) == pytest.approx(0.1)
 
 
-def two_tracks(b1: float, b2: float, rate: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Model states (2, 1, 4) and covariances of two tracks [brg, rate, level, level rate]."""
-    xm = np.array([[[math.radians(b1), rate, 10.0, 0.0]], [[math.radians(b2), rate, 10.0, 0.0]]])
+def tracks(*b: float, rate: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Model states (K, 1, 4) and covariances of tracks [brg, rate, level, level rate]."""
+    xm = np.array([[[math.radians(v), rate, 10.0, 0.0]] for v in b])
     P = np.diag([DEG**2, (1e-3) ** 2, 4.0, 1e-4])
     P[0, 1] = P[1, 0] = 0.5 * DEG * 1e-3
-    return xm, np.broadcast_to(P, (2, 1, 4, 4)).copy()
+    return xm, np.broadcast_to(P, (len(b), 1, 4, 4)).copy()
 
 
 def test_the_common_mode_update_moves_both_tracks_alike_and_keeps_their_difference() -> None:
-    xm, Pm = two_tracks(91.0, 89.0)
-    ok = common_mode_update(xm, Pm, np.array([[0, 1]]), np.radians([91.0]), np.array([(0.5 * DEG) ** 2]))
-    assert ok[0]
+    xm, Pm = tracks(91.0, 89.0)
+    assert common_mode_update(xm, Pm, np.array([1, 0]), math.radians(91.0), (0.5 * DEG) ** 2)
     shift = np.degrees(xm[:, 0, 0]) - np.array([91.0, 89.0])
     assert shift[0] == pytest.approx(shift[1]) and shift[0] > 0.3  # both pulled towards 91
     assert math.degrees(xm[0, 0, 0] - xm[1, 0, 0]) == pytest.approx(2.0)
     assert xm[0, 0, 1] > 0 and xm[0, 0, 1] == pytest.approx(xm[1, 0, 1])  # the rate follows
     assert Pm[0, 0, 0, 0] < DEG**2 and Pm[0, 0, 2, 2] == pytest.approx(4.0)  # level untouched
-    xm, Pm = two_tracks(91.0, 89.0)
-    assert not common_mode_update(xm, Pm, np.array([[0, 1]]), np.radians([100.0]),
-                                  np.array([(0.5 * DEG) ** 2]))[0]  # beyond the gate
-    assert math.degrees(xm[0, 0, 0]) == pytest.approx(91.0)
+    xm, Pm = tracks(91.0, 89.0)
+    assert not common_mode_update(xm, Pm, np.array([1, 0]), math.radians(100.0), (0.5 * DEG) ** 2)
+    assert math.degrees(xm[0, 0, 0]) == pytest.approx(91.0)  # beyond the gate
+
+
+def test_the_common_mode_of_three_moves_all_alike() -> None:
+    xm, Pm = tracks(89.0, 90.0, 91.0)
+    assert common_mode_update(xm, Pm, np.array([0, 1, 2]), math.radians(90.6), (0.5 * DEG) ** 2)
+    d = np.degrees(np.diff(xm[:, 0, 0]))
+    assert d == pytest.approx([1.0, 1.0]) and math.degrees(xm[1, 0, 0]) > 90.3
 
 
 # Runs that swapped before the pairs' rules, through the real tracker (seeds from

@@ -34,6 +34,7 @@ class BearingCrossing:
             params = replace(params, volume=2.0 * math.pi * (band_hz[1] - band_hz[0]))
         self.manager = CrossingManager(params)
         self.memory = params.mode == "memory"  # 004 claim 5: alpha = 0 while ambiguous
+        self.groups = np.empty(0, dtype=np.intp)  # ambiguity group labels of the last `gains`
 
     def gains(
         self, t: float, ids: np.ndarray, confirmed: np.ndarray, x: np.ndarray, z: np.ndarray,
@@ -45,6 +46,7 @@ class BearingCrossing:
         maps predicted measurements (K, m) to the diagonals of their R (K, m)."""
         N = ids.size
         alpha, amb = np.ones(N), np.zeros(N, dtype=bool)
+        self.groups = -1 - np.arange(N)  # a tentative track is alone
         conf = np.flatnonzero(confirmed)
         if conf.size == 0:
             return alpha, amb
@@ -56,6 +58,7 @@ class BearingCrossing:
         a, f = self.manager.step(t, ids[conf], zp[:, dims], cov, zm[conf][:, dims], n_det,
                                  angle_idx=[0])
         alpha[conf], amb[conf] = a, f
+        self.groups[conf] = self.manager.groups
         return alpha, amb
 
     def exit_pairs(

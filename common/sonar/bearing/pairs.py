@@ -46,75 +46,77 @@ def per_track(n: int, rows: np.ndarray, values: np.ndarray) -> np.ndarray:
     return out
 
 
-def memory_pairs(brg: np.ndarray, var: np.ndarray, frozen: np.ndarray) -> np.ndarray:
-    """Pairs (K, 2) of track rows: frozen tracks that are each other's nearest frozen
-    neighbour in bearing (d^2 = (b_i - b_j)^2 / (var_i + var_j))."""
+def memory_groups(labels: np.ndarray, brg: np.ndarray, frozen: np.ndarray) -> list[np.ndarray]:
+    """The groups of at least two frozen tracks: rows with one label of 004's ambiguity
+    groups (common.core.crossing.ambiguity_groups), each in bearing order (on the circle,
+    from its first member)."""
     idx = np.flatnonzero(frozen)
-    if idx.size < 2:
-        return np.zeros((0, 2), dtype=np.intp)
-    d = wrap_pi(brg[idx, None] - brg[None, idx])
-    d2 = d**2 / (var[idx, None] + var[None, idx])
-    np.fill_diagonal(d2, np.inf)
-    near = np.argmin(d2, axis=1)
-    first = np.flatnonzero((near[near] == np.arange(idx.size)) & (np.arange(idx.size) < near))
-    return np.column_stack([idx[first], idx[near[first]]])
+    out = []
+    for lab in np.unique(labels[idx]):
+        g = idx[labels[idx] == lab]
+        if g.size >= 2:
+            out.append(g[np.argsort(wrap_pi(brg[g] - brg[g[0]]))])
+    return out
 
 
-def ordered(pairs: np.ndarray, brg: np.ndarray, P00: np.ndarray, det_brg: np.ndarray) -> np.ndarray:
-    """Mask of the pairs whose order is known: the predicted difference d = b_1 - b_2 is at
-    least SIGN_SIGMAS of its sigma from 0 (var d = P_1 + P_2), and GNN gave each track a
-    detection, in that order."""
-    a, b = pairs[:, 0], pairs[:, 1]
-    d = wrap_pi(brg[a] - brg[b])
-    dz = wrap_pi(det_brg[a] - det_brg[b])  # NaN without both detections
-    return (np.abs(d) >= SIGN_SIGMAS * np.sqrt(P00[a] + P00[b])) & (d * dz > 0)
+def ordered(group: np.ndarray, brg: np.ndarray, P00: np.ndarray, det_brg: np.ndarray) -> bool:
+    """True when the group's order is known: every two neighbours in bearing order are at
+    least SIGN_SIGMAS of their difference's sigma apart (var d = P_1 + P_2), and GNN gave
+    each track a detection, in that order."""
+    a, b = group[:-1], group[1:]
+    d = wrap_pi(brg[b] - brg[a])  # > 0: the group is in bearing order
+    dz = wrap_pi(det_brg[b] - det_brg[a])  # NaN without both detections
+    return bool(np.all((d >= SIGN_SIGMAS * np.sqrt(P00[a] + P00[b])) & (dz > 0)))
 
 
-def release(frozen: np.ndarray, brg: np.ndarray, P00: np.ndarray, rows: np.ndarray,
-            det_brg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The tracks (N,) mask released from the memory mode for this scan (their pair's order is
-    known, `ordered`) and the pairs (K, 2) that stay frozen, from the frozen mask, the
-    predicted bearings brg and variances P00 (N,), and the GNN pairs: track rows and
-    their detections' bearings det_brg."""
-    pairs = memory_pairs(brg, P00, frozen)
-    known = ordered(pairs, brg, P00, per_track(brg.size, rows, det_brg))
+def release(groups: list[np.ndarray], brg: np.ndarray, P00: np.ndarray, rows: np.ndarray,
+            det_brg: np.ndarray) -> np.ndarray:
+    """The tracks (N,) mask released from the memory mode for this scan (their group's order
+    is known, `ordered`), from the frozen groups (`memory_groups`), the predicted bearings
+    brg and variances P00 (N,), and the GNN pairs: track rows and their detections'
+    bearings det_brg."""
+    det = per_track(brg.size, rows, det_brg)
     released = np.zeros(brg.size, dtype=bool)
-    released[pairs[known].ravel()] = True
-    return released, pairs[~known]
+    for g in groups:
+        released[g] = ordered(g, brg, P00, det)
+    return released
 
 
-def centroid_update(pairs: np.ndarray, rows: np.ndarray, det_brg: np.ndarray, det_var: np.ndarray,
-                    xm: np.ndarray, Pm: np.ndarray) -> None:
-    """The common-mode update of the frozen pairs, in place on the model states xm, Pm (N, J,
-    ...), from the GNN pairs: track rows, their detections' bearings and variances."""
+def centroid_update(groups: list[np.ndarray], rows: np.ndarray, det_brg: np.ndarray,
+                    det_var: np.ndarray, xm: np.ndarray, Pm: np.ndarray) -> None:
+    """The common-mode update of the frozen groups, in place on the model states xm, Pm (N,
+    J, ...), from the GNN pairs: track rows, their detections' bearings and variances."""
     n = xm.shape[0]
-    zc, rc, seen = centroid_measurements(pairs, per_track(n, rows, det_brg), per_track(n, rows, det_var))
-    common_mode_update(xm, Pm, pairs[seen], zc[seen], rc[seen])
+    zb, zv = per_track(n, rows, det_brg), per_track(n, rows, det_var)
+    for g in groups:
+        zc, rc, seen = centroid_measurement(zb[g], zv[g])
+        if seen:
+            common_mode_update(xm, Pm, g, zc, rc)
 
 
-def centroid_measurements(pairs: np.ndarray, det_brg: np.ndarray, det_var: np.ndarray
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centroid bearing (the circular mean), its variance (R_1 + R_2) / 4 and the mask of
-    the pairs measured (GNN gave each track a detection), from the bearing det_brg (N,)
-    and variance det_var of the detection of each track (NaN: none)."""
-    za, zb = det_brg[pairs[:, 0]], det_brg[pairs[:, 1]]
-    zc = wrap_2pi(zb + wrap_pi(za - zb) / 2.0)
-    return zc, (det_var[pairs[:, 0]] + det_var[pairs[:, 1]]) / 4.0, ~np.isnan(za) & ~np.isnan(zb)
+def centroid_measurement(det_brg: np.ndarray, det_var: np.ndarray) -> tuple[float, float, bool]:
+    """Centroid bearing (the circular mean), its variance sum R / n^2 and whether the group
+    is measured (GNN gave each of its n tracks a detection), from the bearings det_brg (n,)
+    and variances det_var of its tracks' detections (NaN: none)."""
+    n = det_brg.size
+    zc = float(wrap_2pi(det_brg[0] + np.mean(wrap_pi(det_brg - det_brg[0]))))
+    return zc, float(np.sum(det_var)) / n**2, not bool(np.isnan(det_brg).any())
 
 
-def common_mode_update(xm: np.ndarray, Pm: np.ndarray, pairs: np.ndarray, zc: np.ndarray,
-                       rc: np.ndarray) -> np.ndarray:
-    """Update the model states xm (N, J, n), Pm (N, J, n, n) of both tracks of each pair in
-    place with its centroid measurement zc, rc (a pair is used if every model's centroid
-    innovation passes GATE); returns the mask of the pairs updated."""
-    a, b = pairs[:, 0], pairs[:, 1]
-    ph_a, ph_b = Pm[a, :, :, 0], Pm[b, :, :, 0]  # P h' per model (K, J, n)
-    S = (ph_a[..., 0] + ph_b[..., 0]) / 4.0 + rc[:, None]  # h_c P h_c' + r_c
-    nu = wrap_pi(zc[:, None] - (xm[b, :, 0] + wrap_pi(xm[a, :, 0] - xm[b, :, 0]) / 2.0))
-    ok = np.all(nu**2 / S <= GATE, axis=1)
-    for k, ph in ((a[ok], ph_a[ok]), (b[ok], ph_b[ok])):
-        K = ph / (2.0 * S[ok, :, None])  # gain of track k on the centroid: P_k h' / 2 S
-        xm[k] += K * nu[ok, :, None]
-        Pm[k] -= K[..., :, None] * ph[..., None, :] / 2.0
-        xm[k, :, 0] = wrap_2pi(xm[k, :, 0])
-    return ok
+def common_mode_update(xm: np.ndarray, Pm: np.ndarray, group: np.ndarray, zc: float,
+                       rc: float) -> bool:
+    """Update the model states xm (N, J, n), Pm (N, J, n, n) of every track of the group in
+    place with its centroid measurement zc, rc, h_c = [h, ..., h] / n (used if every
+    model's centroid innovation passes GATE); returns whether the group was updated."""
+    n = group.size
+    ph = Pm[group, :, :, 0]  # P h' per track and model (n, J, dim)
+    S = ph[..., 0].sum(axis=0) / n**2 + rc  # h_c P h_c' + r_c (J,), no cross-covariance
+    ref = xm[group[0], :, 0]
+    nu = wrap_pi(zc - (ref + np.mean(wrap_pi(xm[group, :, 0] - ref), axis=0)))
+    if not np.all(nu**2 / S <= GATE):
+        return False
+    K = ph / (n * S[None, :, None])  # gain of each track on the centroid: P_k h' / n S
+    xm[group] += K * nu[None, :, None]
+    Pm[group] -= K[..., :, None] * ph[..., None, :] / n
+    xm[group, :, 0] = wrap_2pi(xm[group, :, 0])
+    return True

@@ -52,7 +52,11 @@ class TrackerParams(Params):
         runs with an unflagged swap 10 against 6 (sonar_x_three; 0 for both on the 16
         other scenes), though with fewer break runs (9 against 14: sonar_x_amp 0 / 2,
         sonar_x_three 9 / 12) and fewer false tracks (sonar_x_clutter 0.36 against 0.60
-        per 100 cycles). Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes)
+        per 100 cycles). With the memory-mode groups of docs/decisions/027-sonar-crossing-groups.md
+        (40 seeds on the sonar_x_* scenes, 20 on the 13 others) the reason is gone: on
+        ranks first, 0 unflagged swap runs for both, break runs 0 against 3 (sonar_x_amp
+        0 / 2, sonar_x_three 0 / 1), false tracks 0.08 against 0.11 per 100 cycles; the
+        default is not switched there (open in 027). Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes)
         the law at 2 dB gave 4 swap runs with crossing management (0 without it); the hold
         scenes (sonar_hold*) set it.
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).

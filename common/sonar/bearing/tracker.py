@@ -9,15 +9,17 @@ time only:
   4. seed 004 crossing management on the confirmed tracks: alpha as gain weight (in
      memory mode the IMM predicts with its quiet Q, common.sonar.bearing.imm); a track
      leaving the ambiguity keeps its detection only if no other confirmed track's
-     prediction is nearer to it (deviation; common.sonar.bearing.crossing); a pair of
-     frozen tracks whose order is sure is released for the scan (deviation;
-     common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
+     prediction is nearer to it (deviation; common.sonar.bearing.crossing); a group of
+     frozen tracks (004's ambiguity groups) whose order is sure, or a frozen pair whose
+     resolved detections follow the V of its separations, is released for the scan
+     (deviations; common.sonar.bearing.pairs, common.sonar.bearing.pair_order); a track
+     given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
      common.sonar.bearing.range_noise and its bearing and bearing rate along the
      solution's relative track (observable range) or, near a closest approach, from the
      solution itself (common.sonar.bearing.tma_prediction, both models); a number reopened
      for a new track drops its hint;
-  5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
+  5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen groups'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
      5b. with `block_estimator`, a track whose 004 flag clears resumes from the line 004's
      block estimator (eq. 6-10) fitted to the crossing's detections
@@ -64,7 +66,8 @@ from common.sonar.bearing.model import (
     thresholds,
 )
 from common.sonar.bearing.multiline import NEW, MultiLineGrouper, MultiLineTrack, multiline_tracks
-from common.sonar.bearing.pairs import centroid_update, release
+from common.sonar.bearing.pair_order import PairOrders
+from common.sonar.bearing.pairs import centroid_update, memory_groups, per_track, release
 from common.sonar.bearing.params import TrackerParams, process_noise, transition
 from common.sonar.bearing.range_noise import RangeNoise, TmaHint
 from common.sonar.bearing.tma_prediction import with_bearing
@@ -124,6 +127,7 @@ class BearingTracker:
                           if self.narrowband else None)
         self.history = BearingHistory(p.history_keep_deleted)
         self.range_noise = RangeNoise()
+        self.pair_orders = PairOrders()
         self.t: float | None = None
         self._next_uid = 0
         self._ml_tracks: list[MultiLineTrack] = []
@@ -199,9 +203,14 @@ class BearingTracker:
             keep = self.crossing.exit_pairs(conf, tab.ambiguous[idx], ambiguous, x, z, Rd,
                                             rows, cols_)
         rows, cols_, y, detS, d2 = rows[keep], cols_[keep], y[keep], detS[keep], d2[keep]
-        frozen = np.zeros((0, 2), dtype=np.intp)
-        if self.crossing is not None and self.crossing.memory:  # 004 memory-mode pairs
-            released, frozen = release(conf & ambiguous, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+        frozen: list[np.ndarray] = []
+        if self.crossing is not None and self.crossing.memory:  # 004 memory-mode groups
+            groups = memory_groups(self.crossing.groups, x[:, 0], conf & ambiguous)
+            det = per_track(idx.size, rows, z[cols_, 0])
+            self.pair_orders.observe(t, tab.uid[idx], groups, x[:, 0], det)
+            released = release(groups, x[:, 0], P[:, 0, 0], rows, z[cols_, 0])
+            released, frozen = self.pair_orders.settle(tab.uid[idx], released, groups, det,
+                                                       per_track(idx.size, rows, Rd[cols_, 0]))
             alpha[released] = 1.0
         R = diagonal_covariances(Rd[cols_])
 
@@ -213,7 +222,7 @@ class BearingTracker:
             xu[:, 0] = wrap_2pi(xu[:, 0])
             x[rows], P[rows] = xu, Pu
 
-        if frozen.size:  # the frozen pairs' centroids (common.sonar.bearing.pairs)
+        if frozen:  # the frozen groups' centroids (common.sonar.bearing.pairs)
             x, P = self._centroids(idx, frozen, x, P, rows, z[cols_, 0], Rd[cols_, 0])
         if self.blocks is not None:  # 004 eq. 6-10 (common.sonar.bearing.block)
             self._block_exits(t, idx, conf, ambiguous, x, P, z[:, 0], Rd[:, 0])
@@ -252,12 +261,12 @@ class BearingTracker:
         self.t = t
         return self._cycle(t, live)
 
-    def _centroids(self, idx: np.ndarray, pairs: np.ndarray, x: np.ndarray, P: np.ndarray,
+    def _centroids(self, idx: np.ndarray, groups: list[np.ndarray], x: np.ndarray, P: np.ndarray,
                    rows: np.ndarray, zb: np.ndarray, rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """x, P after the common-mode update of the frozen pairs (per IMM model)."""
+        """x, P after the common-mode update of the frozen groups (per IMM model)."""
         tab, imm = self.table, self.imm is not None
         xm, Pm = (tab.xm[idx], tab.Pm[idx]) if imm else (x[:, None].copy(), P[:, None].copy())
-        centroid_update(pairs, rows, zb, rb, xm, Pm)
+        centroid_update(groups, rows, zb, rb, xm, Pm)
         if not imm:
             return xm[:, 0], Pm[:, 0]
         tab.xm[idx], tab.Pm[idx] = xm, Pm
