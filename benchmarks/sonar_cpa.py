@@ -109,6 +109,11 @@ class Trace:
         self.confirmed.append({int(i) for i in ids[conf]})
 
 
+def rho_f(doc: dict[str, Any]) -> float:
+    """The MHT's false-alarm density of a scene: its clutter per scan over 2 pi rad x 10 dB."""
+    return float(doc["sim"]["sonar"].get("clutter", 1.0) / (2.0 * math.pi * 10.0))
+
+
 def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
     """One scene, one seed, one association mode in one process; feedback: the TMA solutions
     given back to the tracker as the bearing-tracker service does (tma_hints_from)."""
@@ -116,8 +121,7 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
     params = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode_association=mode)
-    rho_f = doc["sim"]["sonar"].get("clutter", 1.0) / (2.0 * math.pi * 10.0)
-    trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
+    trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f(doc)),
                           arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mgr = TmaManager(arr.id)
     trace = Trace()
@@ -149,14 +153,16 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
 
 def run_processes(path: Path, seed: int, mode: str, workdir: Path, speed: float = 300.0) -> CpaRun:
     """One scene, one seed, one mode through the processes: a router, the bearing-tracker
-    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode) and
+    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode and
+    [sonar.tracker.mht] rho_f as in :func:`run_once`) and
     the simulator at ``speed`` x real time (the TMA solution of a scan is back at the
     tracker before the next scan)."""
     from common.bus.local_run import Deployment
 
     workdir.mkdir(parents=True, exist_ok=True)
     scene = workdir / path.name
-    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n')
+    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n'
+                     f'\n[sonar.tracker.mht]\nrho_f = {rho_f(tomllib.loads(path.read_text()))!r}\n')
     cfg = load(scene)
     arr = cfg.arrays[0]
     doc = tomllib.loads(scene.read_text())
