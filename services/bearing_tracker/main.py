@@ -5,11 +5,13 @@ answers root/sonar/history/A/<id> with the bearing register of a confirmed track
 (docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
 main hypothesis, with the retrodicted bearings beside); a query with ``as_of=<t>`` is
 answered as the cycle of time t left the register (common.sonar.history_as_of; a cycle
-no longer kept: the current rows up to t, logged and counted as ``history_as_of_gone``).
+no longer kept: the current rows up to t, logged and counted as ``history_as_of_gone``;
+answers for an earlier cycle are counted as ``history_behind``).
 Also subscribes root/sonar/tma/A: each solution is kept as its track's hint for the later cycles
 (common.sonar.bearing.range_noise, tma_prediction; docs/decisions/026, 028); a tma message
 publishes nothing, so the loop tracker -> tma -> tracker is one step per detection list,
-never waited for. Parameters:
+never waited for (a solution that comes after the next detection list is counted as
+``tma_late``: it reaches the tracker a cycle later than in one process). Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
 [sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only); the
 core is built by common.sonar.trackers.bearing_tracker.
@@ -85,6 +87,8 @@ def main(args: argparse.Namespace) -> int:
             return
         core = cores[0]
         found, kept = history_as_of(core, confirmed, int(chunk), t)
+        if t is not None and t < float(core.t or 0.0):
+            svc.counters["history_behind"] += 1  # answered as of an earlier cycle
         if not kept:
             svc.reject("history_as_of_gone", f"track {chunk} as of t={t}: cycle not kept, "
                        "answered with the current rows up to t", str(query.key_expr))
@@ -99,6 +103,8 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_array", f"array '{msg['array']}' on {key}")
         if not cores:
             return
+        if msg["t"] < float(cores[0].t or 0.0):
+            svc.counters["tma_late"] += 1  # after the next scan: a cycle later than in one process
         for tid, hint in tma_hints_from(msg):
             cores[0].tma_hint(tid, hint)
 
