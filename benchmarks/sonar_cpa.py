@@ -9,9 +9,10 @@ run_once(..., feedback=False) without). Figures: docs/decisions/028-own-state-al
 (026 and 018 before it).
 
 Run: .venv/bin/python benchmarks/sonar_cpa.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
-[--processes] (through a real router and the bearing-tracker and tma processes, the
-simulator at 300 x real time: the same numbers as in one process when every TMA solution
-is back before the next scan; about 8 s a run).
+[--processes [--same]] (through a real router and the bearing-tracker and tma processes,
+the simulator at 300 x real time: the same numbers as in one process when every TMA
+solution is back before the next scan; about 8 s a run; --same also runs each seed in one
+process and fails when a run differs).
 
 Scenes (scenarios/, docs/scenarios.md): sonar_cpa_coarse (60 s sampling, CPA 0.5 km,
 own-ship turn), sonar_cpa_fine_300m (30 s, 0.3 km, no turn), sonar_cpa_coarse_1km (60 s,
@@ -41,7 +42,7 @@ import math
 import sys
 import tempfile
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import astuple, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -109,6 +110,11 @@ class Trace:
         self.confirmed.append({int(i) for i in ids[conf]})
 
 
+def rho_f(doc: dict[str, Any]) -> float:
+    """The MHT's false-alarm density of a scene: its clutter per scan over 2 pi rad x 10 dB."""
+    return float(doc["sim"]["sonar"].get("clutter", 1.0) / (2.0 * math.pi * 10.0))
+
+
 def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
     """One scene, one seed, one association mode in one process; feedback: the TMA solutions
     given back to the tracker as the bearing-tracker service does (tma_hints_from)."""
@@ -116,8 +122,7 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
     params = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode_association=mode)
-    rho_f = doc["sim"]["sonar"].get("clutter", 1.0) / (2.0 * math.pi * 10.0)
-    trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f),
+    trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f(doc)),
                           arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mgr = TmaManager(arr.id)
     trace = Trace()
@@ -149,14 +154,16 @@ def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) ->
 
 def run_processes(path: Path, seed: int, mode: str, workdir: Path, speed: float = 300.0) -> CpaRun:
     """One scene, one seed, one mode through the processes: a router, the bearing-tracker
-    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode) and
+    and tma services (a copy of the scene with [sonar.tracker] mode_association = mode and
+    [sonar.tracker.mht] rho_f as in :func:`run_once`) and
     the simulator at ``speed`` x real time (the TMA solution of a scan is back at the
     tracker before the next scan)."""
     from common.bus.local_run import Deployment
 
     workdir.mkdir(parents=True, exist_ok=True)
     scene = workdir / path.name
-    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n')
+    scene.write_text(path.read_text() + f'\n[sonar.tracker]\nmode_association = "{mode}"\n'
+                     f'\n[sonar.tracker.mht]\nrho_f = {rho_f(tomllib.loads(path.read_text()))!r}\n')
     cfg = load(scene)
     arr = cfg.arrays[0]
     doc = tomllib.loads(scene.read_text())
@@ -182,6 +189,11 @@ def run_processes(path: Path, seed: int, mode: str, workdir: Path, speed: float 
     last = max(tma, key=lambda m: m["t"])
     trace.solutions = {s["track"]: s for s in last["solutions"]}
     return score(trace, doc, arr.sigma0)
+
+
+def same_run(a: CpaRun, b: CpaRun) -> bool:
+    """Whether two runs left the same numbers (NaN equal to NaN)."""
+    return bool(np.array_equal(np.array(astuple(a), float), np.array(astuple(b), float), equal_nan=True))
 
 
 def score(trace: Trace, doc: dict[str, Any], sigma0: float) -> CpaRun:
@@ -238,6 +250,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mode", nargs="*", default=list(MODES), choices=MODES)
     ap.add_argument("--processes", action="store_true",
                     help="through the real router, bearing-tracker and tma processes (run_processes)")
+    ap.add_argument("--same", action="store_true",
+                    help="with --processes: each run also in one process; fail when one differs")
     a = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="sonar_cpa_"))
     ok = True
@@ -252,6 +266,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{case:<26}{mode:>5}{len(runs):>5}{row['one number']:>9}{row['min held']:>9.2f}{row['solved']:>7}"
               f"{row['CRLB m']:>9.0f}{row['RMS/CRLB']:>9.2f}{row['max/CRLB']:>9.2f}{row['NEES']:>9.2f}{row['flag']:>6}"
               f"{'' if good else '  FAIL'}", flush=True)
+        if a.processes and a.same:
+            differ = [s for s, r in enumerate(runs, 1) if not same_run(r, run_once(path, s, mode))]
+            ok &= not differ
+            print(f"  through the processes = in one process in {a.runs - len(differ)} of {a.runs} runs"
+                  + (f"; FAIL, seeds {differ} differ" if differ else ""), flush=True)
     print("goals met" if ok else "GOAL FAILED: one number, held >= 0.9, solved after the approach in every run; "
           "range_observable true with a turn, false without, on every solution; "
           "with a turn RMS <= 1.5 CRLB, max <= 5 CRLB, NEES in [2, 8]")

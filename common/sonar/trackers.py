@@ -36,8 +36,10 @@ class BearingTrackerCore(Protocol):
         """Give a track its contact's latest TMA solution (common.sonar.bearing.range_noise)."""
         ...
 
-    def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
-        """("confirmed" | "deleted", register columns) of a confirmed track, else None."""
+    def history_of(self, track_id: int, as_of: float | None = None
+                   ) -> tuple[str, dict[str, np.ndarray]] | None:
+        """("confirmed" | "deleted", register columns) of a confirmed track, else None;
+        with ``as_of``, as of that cycle time (common.sonar.history_as_of)."""
         ...
 
 

@@ -3,11 +3,15 @@
 Subscribes root/sonar/detections/A, publishes root/sonar/btracks/A each cycle and
 answers root/sonar/history/A/<id> with the bearing register of a confirmed track
 (docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
-main hypothesis, with the retrodicted bearings beside). Also subscribes
-root/sonar/tma/A: each solution is kept as its track's hint for the later cycles
+main hypothesis, with the retrodicted bearings beside); a query with ``as_of=<t>`` is
+answered as the cycle of time t left the register (common.sonar.history_as_of; a cycle
+no longer kept: the current rows up to t, logged and counted as ``history_as_of_gone``;
+answers for an earlier cycle are counted as ``history_behind``).
+Also subscribes root/sonar/tma/A: each solution is kept as its track's hint for the later cycles
 (common.sonar.bearing.range_noise, tma_prediction; docs/decisions/026, 028); a tma message
 publishes nothing, so the loop tracker -> tma -> tracker is one step per detection list,
-never waited for. Parameters:
+never waited for (a solution that comes after the next detection list is counted as
+``tma_late``: it reaches the tracker a cycle later than in one process). Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),
 [sonar.tracker.mht] (MhtParams), [sonar.crossing] (CrossingParams, "gnn" only); the
 core is built by common.sonar.trackers.bearing_tracker.
@@ -24,6 +28,7 @@ from common.cli import add_common, load_config
 from common.core.crossing import CrossingParams
 from common.core.rejection import Rejected
 from common.deploy.config import section
+from common.sonar.history_as_of import ConfirmedLog, history_as_of, parse_as_of
 from common.sonar.mht.params import MhtParams, SonarTrackerParams
 from common.sonar.trackers import BearingTrackerCore, bearing_tracker
 from common.wire import protocol
@@ -43,6 +48,7 @@ def main(args: argparse.Namespace) -> int:
     crossing = section(cfg, "sonar.crossing", CrossingParams)
     svc = Service("bearing_tracker", arr.id, cfg)
     cores: list[BearingTrackerCore] = []
+    confirmed = ConfirmedLog(params.history_as_of_cycles)
 
     def tracker(has_freq: bool) -> BearingTrackerCore:
         """The core, built at the first detection list (it resolves mode "auto")."""
@@ -68,6 +74,7 @@ def main(args: argparse.Namespace) -> int:
         own = msg["own"]
         cycle = core.step(msg["t"], brg, amp, own["heading"], own["x"], own["y"],
                           freq if core.narrowband else None, sbrg)
+        confirmed.record(cycle.t, cycle.ids, cycle.confirmed)
         svc.last_t = msg["t"]
         svc.publish(f"sonar/btracks/{arr.id}", btracks_message(arr.id, cycle, core.narrowband))
 
@@ -75,14 +82,20 @@ def main(args: argparse.Namespace) -> int:
         chunk = str(query.key_expr).rsplit("/", 1)[-1]
         if not chunk.isdigit():
             raise Rejected("bad_history_id", f"'{chunk}' is not a track number")
+        t = parse_as_of(query.parameters.get("as_of"))
         if not cores:
             return
         core = cores[0]
-        found = core.history_of(int(chunk))
+        found, kept = history_as_of(core, confirmed, int(chunk), t)
+        if t is not None and t < float(core.t or 0.0):
+            svc.counters["history_behind"] += 1  # answered as of an earlier cycle
+        if not kept:
+            svc.reject("history_as_of_gone", f"track {chunk} as of t={t}: cycle not kept, "
+                       "answered with the current rows up to t", str(query.key_expr))
         if found is None:
             return
-        query.reply(query.key_expr, protocol.encode(
-            history_message(arr.id, float(core.t or 0.0), int(chunk), found)))
+        t_reg = t if t is not None and kept else float(core.t or 0.0)
+        query.reply(query.key_expr, protocol.encode(history_message(arr.id, t_reg, int(chunk), found)))
 
     def on_tma(key: str, payload: bytes) -> None:
         msg = protocol.decode("tma", payload)
@@ -90,6 +103,8 @@ def main(args: argparse.Namespace) -> int:
             raise Rejected("unknown_array", f"array '{msg['array']}' on {key}")
         if not cores:
             return
+        if msg["t"] < float(cores[0].t or 0.0):
+            svc.counters["tma_late"] += 1  # after the next scan: a cycle later than in one process
         for tid, hint in tma_hints_from(msg):
             cores[0].tma_hint(tid, hint)
 

@@ -4,8 +4,9 @@ track of one array (TMA of seed 002, constrained TMA with error handling of seed
 Subscribes root/sonar/detections/A (own-ship positions), root/sonar/btracks/A (confirmed tracks)
 and the operator's inputs (issue 31): root/sonar/tma/bounds/A (bounds of the array or of
 one track), root/sonar/tma/support/A (002 support values of one track) and
-root/sonar/tma/clear/A; fetches root/sonar/history/A/<id> for a newly confirmed track and
-whenever its TMA cycle is due (the associated detections); publishes root/sonar/tma/A per
+root/sonar/tma/clear/A; fetches root/sonar/history/A/<id>?as_of=<btracks t> for a newly
+confirmed track and whenever its TMA cycle is due (the associated detections, as the
+tracker's cycle of that btracks message left them); publishes root/sonar/tma/A per
 btracks cycle, and root/sonar/tma/ack/A for every input with a request id: accepted, or
 the reason it was not (docs/protocol.md). With ``[sonar.tma] state_dir`` the inputs (and
 the births of their tracks) are written to <state_dir>/tma-<A>.json whenever they change
@@ -57,9 +58,10 @@ def main(args: argparse.Namespace) -> int:
     state = StateFile(params.state_dir, arr.id, svc)
     state.load(mgr)
 
-    def history(tid: int) -> TrackHistory | None:
-        """The bearing register of a newly confirmed track (None: not served in time)."""
-        for reply in svc.session.get(svc.key(f"sonar/history/{arr.id}/{tid}"), timeout=HISTORY_TIMEOUT_S):
+    def history(tid: int, t: float) -> TrackHistory | None:
+        """The bearing register of a track as of btracks time t (None: not served in time)."""
+        selector = f"{svc.key(f'sonar/history/{arr.id}/{tid}')}?as_of={t!r}"
+        for reply in svc.session.get(selector, timeout=HISTORY_TIMEOUT_S):
             if reply.ok is None:
                 continue
             try:
@@ -74,7 +76,7 @@ def main(args: argparse.Namespace) -> int:
         if dropped:
             svc.reject("no_own_ship", f"{dropped} btracks messages without own-ship position", "sonar/btracks")
         for b in ready:
-            hist = {tid: history(tid) for tid in mgr.history_wanted(b)}
+            hist = {tid: history(tid, b.t) for tid in mgr.history_wanted(b)}
             svc.publish(f"sonar/tma/{arr.id}", tma_message(mgr.step(b, hist)))
             svc.last_t = b.t
         state.save(mgr)

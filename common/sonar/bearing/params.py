@@ -78,6 +78,11 @@ class TrackerParams(Params):
     band_hz: narrowband frequency band; with 2 pi it is the volume c of seed 004.
     ml_brg_tol_deg, ml_rate_tol_deg_s: bounds of claims 12-13 (bearing, bearing rate).
     history_keep_deleted: deleted confirmed tracks whose history stays queryable.
+    history_as_of_cycles: cycles whose register stays queryable "as of" their time
+        (a history query with ``as_of``, docs/protocol.md): the tma service's query names
+        the btracks cycle it works on, and a tracker already at a later cycle answers with
+        the register as that cycle published it (the multiple-hypothesis mode keeps a copy
+        of its retrodiction window per cycle: this x n_retro x tracks rows of 7 floats).
     d_merge: a tentative track within this squared distance of a confirmed track (whole
         state, both covariances) is dropped (000 d_merge; 9.21: the 94 % chi-square
         quantile of 4 degrees of freedom).
@@ -110,6 +115,7 @@ class TrackerParams(Params):
     ml_brg_tol_deg: float = 2.0
     ml_rate_tol_deg_s: float = 0.1
     history_keep_deleted: int = 64
+    history_as_of_cycles: int = 16
     d_merge: float = 9.21
 
     RANGES: ClassVar[dict[str, Range]] = {
@@ -124,7 +130,7 @@ class TrackerParams(Params):
         "init_brg_rate_sigma": positive("rad/s"), "init_amp_rate_sigma": positive("dB/s"),
         "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
         "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
-        "history_keep_deleted": count(0), "d_merge": non_negative("d^2"),
+        "history_keep_deleted": count(0), "history_as_of_cycles": count(0), "d_merge": non_negative("d^2"),
         "block_window_s": non_negative("s"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (

@@ -350,14 +350,24 @@ class BearingTracker:
 
     # ------------------------------------------------------------------ register
 
-    def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
+    def history_of(self, track_id: int, as_of: float | None = None
+                   ) -> tuple[str, dict[str, np.ndarray]] | None:
         """("confirmed" | "deleted", columns t, brg, sbrg, own_x, own_y) of a confirmed
-        (live or recently deleted) track, from its first detection; None otherwise."""
+        (live or recently deleted) track, from its first detection; None otherwise.
+        With ``as_of`` (common.sonar.history_as_of): the rows up to that cycle time of any
+        live or recently deleted track, whatever its status now (rows are never rewritten)."""
         tab = self.table
         slot = track_id - tab.first_id
         if 0 <= slot < tab.capacity and tab.id[slot] == track_id:
-            if tab.status[slot] != Status.CONFIRMED:
+            if tab.status[slot] != Status.CONFIRMED and as_of is None:
                 return None
-            return "confirmed", self.history.rows(int(tab.uid[slot]))
-        uid = self.history.retired_uid(track_id)
-        return None if uid is None else ("deleted", self.history.rows(uid))
+            found = ("confirmed", self.history.rows(int(tab.uid[slot])))
+        else:
+            uid = self.history.retired_uid(track_id)
+            if uid is None:
+                return None
+            found = ("deleted", self.history.rows(uid))
+        if as_of is None:
+            return found
+        keep = found[1]["t"] <= as_of
+        return found[0], {k: v[keep] for k, v in found[1].items()}

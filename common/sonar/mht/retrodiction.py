@@ -29,7 +29,9 @@ detection, and none while the track is in a resolution conflict of 000, whose
 detections may be the other target's). The register row of a track at cycle l is the
 detection of its main hypothesis by the retro weights c^retro(l): retrodiction re-judges
 which detection was the track's, and the smoothed bearing is served beside it
-(`smoothed`). A row whose main hypothesis has no detection is not served.
+(`smoothed`). A row whose main hypothesis has no detection is not served. Since the
+window's rows change every cycle, the register is also served as of an earlier cycle
+(common.sonar.mht.register_versions).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ import numpy as np
 
 from common.sonar.bearing.history import HISTORY_COLUMNS
 from common.sonar.mht.hypotheses import heaviest, mixture_moments, state_diff, track_sums
+from common.sonar.mht.register_versions import RegisterVersions
 
 SMOOTHED_COLUMNS = ("t", "brg", "sbrg")
 # columns of a record's rows: time, smoothed bearing and sigma, own position, detection
@@ -105,15 +108,17 @@ def smooth(records: list[CycleRecord]) -> list[tuple[np.ndarray, np.ndarray, np.
 
 class Retrodiction:
     """The last n_retro cycle records, their smoothing, and the bearing register
-    (rows per track from its first detection; the last n_retro rows retrodicted)."""
+    (rows per track from its first detection; the last n_retro rows retrodicted), and
+    the window as each of the last ``keep_versions`` cycles left it."""
 
-    def __init__(self, n_retro: int, keep_deleted: int = 64) -> None:
+    def __init__(self, n_retro: int, keep_deleted: int = 64, keep_versions: int = 0) -> None:
         self.n_retro = max(1, n_retro)
         self.keep_deleted = keep_deleted
         self.window: deque[CycleRecord] = deque(maxlen=self.n_retro)
         self._blocks: list[tuple[np.ndarray, np.ndarray]] = []  # (uid (T,), rows (T, 5))
         self.retired: list[int] = []
         self._inherits: dict[int, tuple[int, float]] = {}
+        self.versions = RegisterVersions(keep_versions)
 
     def push(self, rec: CycleRecord) -> None:
         """Add a cycle, smooth the window, rewrite the window's register rows."""
@@ -133,6 +138,7 @@ class Retrodiction:
                 r.rows[good, 1] = xt[good, 0]
                 r.rows[good, 2] = np.sqrt(Pt[good, 0, 0])
                 _main_detections(r, cr)
+        self.versions.record([(r.uid, r.rows) for r in self.window])
 
     def retire(self, uid: int) -> None:
         """A deleted confirmed track stays queryable (the last keep_deleted of them)."""
@@ -142,27 +148,31 @@ class Retrodiction:
         """Track `uid`, split off `parent` at time t, shares the parent's rows before t."""
         self._inherits[uid] = (parent, t)
 
-    def _block(self, uid: int) -> np.ndarray:
+    def _block(self, uid: int, as_of: float | None = None) -> np.ndarray:
         sel = [rows[u == uid] for u, rows in self._blocks]
         own = np.concatenate(sel) if sel else np.zeros((0, DET.stop))
+        if as_of is not None:
+            own = self.versions.rows_as_of(uid, own, as_of)
         if uid in self._inherits:
             parent, t = self._inherits[uid]
-            before = self._block(parent)
+            before = self._block(parent, as_of)
             own = np.concatenate([before[before[:, 0] < t], own])
         return own
 
-    def rows(self, uid: int) -> dict[str, np.ndarray]:
+    def rows(self, uid: int, as_of: float | None = None) -> dict[str, np.ndarray]:
         """Register of one track, time order: the detections of its main hypothesis
-        (by the retro weights where in the window) with the own position."""
-        block = self._block(uid)
+        (by the retro weights where in the window) with the own position; with
+        ``as_of``, as the cycle of that time left it (RegisterVersions.rows_as_of)."""
+        block = self._block(uid, as_of)
         block = block[np.isfinite(block[:, DET.start])]
         cols = np.column_stack([block[:, T], block[:, DET], block[:, OWN]])
         return {c: cols[:, i].copy() for i, c in enumerate(HISTORY_COLUMNS)}
 
-    def smoothed(self, uid: int) -> dict[str, np.ndarray]:
+    def smoothed(self, uid: int, as_of: float | None = None) -> dict[str, np.ndarray]:
         """Retrodicted bearings of one track at every cycle, time order (000
-        retrodiction; rows older than the window keep their last smoothed value)."""
-        block = self._block(uid)
+        retrodiction; rows older than the window keep their last smoothed value), as of
+        a cycle time as by :meth:`rows`."""
+        block = self._block(uid, as_of)
         cols = np.column_stack([block[:, T], block[:, SMOOTH]])
         return {c: cols[:, i].copy() for i, c in enumerate(SMOOTHED_COLUMNS)}
 

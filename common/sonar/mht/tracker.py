@@ -126,7 +126,7 @@ class MhtTracker:
         self.q_models = (p.q_theta_quiet, p.q_theta) if two else (p.q_theta,)
         self.sojourn = np.asarray(p.imm_sojourn_s if two else [1.0], dtype=float)
         self.tr = TrackArrays(n)
-        self.retro = Retrodiction(mht.n_retro, params.history_keep_deleted)
+        self.retro = Retrodiction(mht.n_retro, params.history_keep_deleted, params.history_as_of_cycles)
         self.t: float | None = None
         self.t_cycle = 0.0
         self.k = 0
@@ -351,19 +351,22 @@ class MhtTracker:
         """The contact's latest TMA solution, used by later cycles (range_noise)."""
         self.range_noise.set(track_id, hint)
 
-    def history_of(self, track_id: int) -> tuple[str, dict[str, np.ndarray]] | None:
+    def history_of(self, track_id: int, as_of: float | None = None
+                   ) -> tuple[str, dict[str, np.ndarray]] | None:
         """("confirmed" | "deleted", register) of a confirmed live or recently deleted
         track, None otherwise. Register: the detections of the track's main hypothesis
         by the retro weights (t, brg, sbrg, own_x, own_y) and the retrodicted bearings at
-        every cycle (t_retro, brg_retro, sbrg_retro; common.sonar.mht.retrodiction)."""
+        every cycle (t_retro, brg_retro, sbrg_retro; common.sonar.mht.retrodiction).
+        With ``as_of`` (common.sonar.history_as_of): the register as the cycle of that
+        time left it, of any live or recently deleted track, whatever its status now."""
         slot = self.tr.slot_of(track_id)
         if slot >= 0:
-            if self.tr.SA[slot] != 1:
+            if self.tr.SA[slot] != 1 and as_of is None:
                 return None
             status = "confirmed"
         elif track_id in self.retro.retired:
             status = "deleted"
         else:
             return None
-        smoothed = {f"{c}_retro": v for c, v in self.retro.smoothed(track_id).items()}
-        return status, {**self.retro.rows(track_id), **smoothed}
+        smoothed = {f"{c}_retro": v for c, v in self.retro.smoothed(track_id, as_of).items()}
+        return status, {**self.retro.rows(track_id, as_of), **smoothed}
