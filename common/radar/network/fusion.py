@@ -138,7 +138,7 @@ class NetworkFusion:
         xp, Pp = T.predicted(t)
         m = z.shape[1]
         rows = np.flatnonzero(eq.ok)
-        trk = np.array([T.member_of(b, int(e)) for e in tr.id[rows]], dtype=int)
+        trk = T.rows_of(b, tr.id[rows])
         mem, free = rows[trk >= 0], rows[(trk < 0) & (tr.status[rows] == Status.CONFIRMED)]
         trk = trk[trk >= 0]
         h = project(xp, self.sites.tx[b], self.sites.rx[b])[:, :m] if len(T) else np.zeros((0, m))
@@ -155,7 +155,7 @@ class NetworkFusion:
         T.count_misses(b, tr.id[mem[~hit]])
         torn = np.flatnonzero(~eq.ok & tr.updated & ~tr.ambiguous)
         T.count_misses(b, tr.id[torn[T.is_member(b, tr.id[torn])]])
-        up_t, up_r = list(trk[hit]), list(mem[hit])
+        up_t, up_r = trk[hit], mem[hit]
         cand = np.flatnonzero(~T.has_base(b))
         if free.size and cand.size:
             ti, ji = np.repeat(cand, free.size), np.tile(free, cand.size)
@@ -163,12 +163,10 @@ class NetworkFusion:
             cost = np.full((cand.size, free.size), np.inf)
             cost.ravel()[d2f <= gam] = d2f[d2f <= gam]
             r_i, c_i = gnn(cost)
-            for a, c in zip(cand[r_i], free[c_i]):
-                T.add_member(int(a), b, int(tr.id[c]))
-                up_t.append(int(a))
-                up_r.append(int(c))
-        if up_t:
-            k, r = np.array(up_t), np.array(up_r)
+            T.add_members(cand[r_i], b, tr.id[free[c_i]])
+            up_t, up_r = np.concatenate([up_t, cand[r_i]]), np.concatenate([up_r, free[c_i]])
+        if up_t.size:
+            k, r = up_t.astype(int), up_r.astype(int)
             x, P, _, _ = kalman.ekf_update(xp[k], Pp[k], z[r], h[k], H[k], R[r], ang)
             T.updated(k, t, x, P, b)
         T.bookkeep(t)
@@ -244,9 +242,7 @@ class NetworkFusion:
             if np.isfinite(self.next_report) else t + self.p.report_period
         T = self.tracks
         x, P = T.predicted(t)
-        member = np.full((len(T), len(self.ids)), -1, dtype=np.int64)
-        for r, m in enumerate(T.members):
-            member[r, list(m)] = list(m.values())
+        member = T.member.copy()
         return [NetworkReport(t, T.id.copy(), T.status.copy(), x, P, T.n_bases(), member,
                               member >= 0)]
 
