@@ -17,8 +17,9 @@ Run: PYTHONPATH=. .venv/bin/python benchmarks/network_centre.py [--scenes 300 10
    times the recorded pace.
 3. Measured: the service's CPU time (all threads, /proc/<pid>/stat) and wall time from
    the replay's start until its control queryable (common.bus.control), answered from
-   the service's loop after every sample queued before the query, counts every report
-   in; scene seconds per CPU second (x real time) and per wall second. Nothing lost:
+   the service's loop after every sample queued before the query (one query at a time,
+   never timed out: a reply to an expired query would count as the service's error),
+   counts every report in; scene seconds per CPU second (x real time) and per wall second. Nothing lost:
    the service's `in` equals the reports replayed, no sample missed (publisher stamps)
    and none rejected; after SIGTERM (the service flushes its window) the radar/gtracks
    received miss no stamp and the last one is within a report period of the last
@@ -56,6 +57,7 @@ from common.wire.sim_messages import run_scenario  # noqa: E402
 
 SERVICE = ("global_fusion", "main")
 REPORT_PERIOD = 1.0  # s: NetworkParams.report_period of the goal scenes
+QUERY_TIMEOUT = 3600.0  # s: a control query waits in the service's queue behind the reports
 
 
 def record_etracks(scene: Path, seed: int, out: Path) -> tuple[int, float]:
@@ -169,7 +171,7 @@ def run_centre(aircraft: int, scene: Path, rec: Path, reports: int, t_last: floa
                 raise RuntimeError(f"global-fusion exited (log: {logdir})")
             if replay.proc.poll() not in (None, 0):
                 raise RuntimeError(f"replay exited with {replay.proc.poll()} (log: {logdir})")
-            state = control(session, timeout=10.0) or state
+            state = control(session, timeout=QUERY_TIMEOUT) or state
             gtracks.drain()
             time.sleep(0.2)
         cpu, wall = cpu_seconds(pid) - cpu0, time.monotonic() - wall0

@@ -136,7 +136,9 @@ def run(args: argparse.Namespace, tmp: Path) -> tuple[list[str], list[str]]:
         states: dict[tuple[str, str], dict[str, Any]] = {}
         while True:
             watch.poll()
-            states = control.states(d.session, ROOT, timeout=5.0) | states
+            # one query at a time, alive until the deadline: it waits in global fusion's
+            # queue behind the reports, and a reply to an expired query counts as its error
+            states |= control.states(d.session, ROOT, timeout=max(deadline - time.monotonic(), 1.0))
             want = sum(states.get(("elementary_tracker", b), {}).get("in", -1) for b in bases)
             plot_in = sum(states.get(("channel_plotter", b), {}).get("in", -1) for b in bases)
             if plot_in == plots and states.get(("global_fusion", "main"), {}).get("in") == want:
