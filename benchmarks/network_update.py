@@ -15,7 +15,9 @@ and initiation and the merge are off (init_period 1e9 s, merge_distance 0): the 
 take their members by the gate and GNN of step 3 and are confirmed by step 5. Fed the
 recorded elementary tracks of benchmarks/network_centre.py (same cache) in this
 process; prints per scene the core's CPU per report (mean, p99), x real time (scene s
-per CPU s), and the confirmed tracks and members at the end; with --profile N,
+per CPU s), the wire's CPU per report (decoding the etracks payloads, encoding the
+radar/gtracks messages: what the service adds, less Zenoh) and x real time with it, and
+the confirmed tracks and members at the end; with --profile N,
 cProfile's N costliest functions (own time). Exit 1 when fewer than 95 % of the
 aircraft are held by a confirmed track at the end (the path is broken).
 """
@@ -41,10 +43,12 @@ from common.bus.recording import RecordReader  # noqa: E402
 from common.core.track_table import Status  # noqa: E402
 from common.deploy.config import load, section  # noqa: E402
 from common.radar.elementary.tracker import ElementaryParams  # noqa: E402
+from common.radar.fusion_core import Network  # noqa: E402
 from common.radar.network.fusion import NetworkFusion  # noqa: E402
 from common.radar.network.params import NetworkParams  # noqa: E402
 from common.sim.scenario import load_scenario  # noqa: E402
-from common.wire.radar_messages import etracks_of  # noqa: E402
+from common.wire import protocol  # noqa: E402
+from common.wire.radar_messages import etracks_of, gtracks_message  # noqa: E402
 from common.wire.sim_messages import run_scenario, truth_state  # noqa: E402
 
 P0 = np.diag([100.0**2, 5.0**2] * 3)
@@ -62,16 +66,20 @@ def first_truth(scene: Path, seed: int) -> tuple[float, np.ndarray]:
 
 
 def run(scene: Path, rec: Path, seed: int, prof: cProfile.Profile | None
-        ) -> tuple[NetworkFusion, list[float], int]:
+        ) -> tuple[NetworkFusion, list[float], float, int]:
     """The core on the recording with tracks opened from truth (module doc); returns it,
-    its CPU s per report and the number of aircraft."""
+    its CPU s per report, the CPU s of the wire (decoding every etracks payload,
+    encoding every radar/gtracks message) and the number of aircraft."""
     cfg = load(scene)
     params = replace(section(cfg, "radar.network", NetworkParams), init_period=1e9, merge_distance=0.0)
-    tracker = section(cfg, "radar.tracker", ElementaryParams)
-    core = NetworkFusion(cfg.bases, params, tracker.sigma_gamma, tracker.sigma_omega)
+    shell = Network(cfg.bases, params, section(cfg, "radar.tracker", ElementaryParams))
+    core = shell.core
     t0, X = first_truth(scene, seed)
     with rec.open("rb") as f:
-        reports = [etracks_of(r.payload) for r in RecordReader(f)]
+        payloads = [r.payload for r in RecordReader(f)]
+    c0 = time.process_time()
+    reports = [etracks_of(p) for p in payloads]
+    wire = time.process_time() - c0
     cost = []
     t_open: float | None = reports[0][1].t + OPEN_AT
     for base, tracks in reports:
@@ -84,14 +92,18 @@ def run(scene: Path, rec: Path, seed: int, prof: cProfile.Profile | None
         c0 = time.process_time()
         if prof is not None:
             prof.enable()
-        core.push(base, tracks.t, tracks)
+        out = shell.push(base, tracks, 0.0)
         if prof is not None:
             prof.disable()
-        cost.append(time.process_time() - c0)
+        c1 = time.process_time()
+        for g in out:
+            protocol.encode(gtracks_message(g, cfg.origin))
+        wire += time.process_time() - c1
+        cost.append(c1 - c0)
     c0 = time.process_time()
-    core.flush()
+    shell.flush()
     cost[-1] += time.process_time() - c0
-    return core, cost, len(X)
+    return core, cost, wire, len(X)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -103,17 +115,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--profile", type=int, default=0, help="print the N costliest functions")
     a = ap.parse_args(argv)
     print(f"{'aircraft':>8} {'reports':>7} {'ms/report':>9} {'p99 ms':>7} {'x rt':>6} "
-          f"{'confirmed':>9} {'members':>7}")
+          f"{'wire ms':>7} {'x rt+wire':>9} {'confirmed':>9} {'members':>7}")
     ok = True
     for n in a.scenes:
         scene, rec, _, _ = cached(n, a.seed, a.duration, a.cache)
         prof = cProfile.Profile() if a.profile else None
-        core, cost, aircraft = run(scene, rec, a.seed, prof)
+        core, cost, wire, aircraft = run(scene, rec, a.seed, prof)
         c = np.array(cost) * 1e3
         conf = int(np.sum(core.tracks.status == Status.CONFIRMED))
         members = int(core.tracks.n_bases().sum())
         print(f"{n:>8} {c.size:>7} {c.mean():>9.2f} {np.percentile(c, 99):>7.1f} "
-              f"{a.duration / max(c.sum() / 1e3, 1e-9):>6.1f} {conf:>9} {members:>7}", flush=True)
+              f"{a.duration / max(c.sum() / 1e3, 1e-9):>6.1f} {1e3 * wire / c.size:>7.2f} "
+              f"{a.duration / max(c.sum() / 1e3 + wire, 1e-9):>9.1f} {conf:>9} {members:>7}", flush=True)
         ok &= conf >= 0.95 * aircraft
         if prof is not None:
             pstats.Stats(prof).sort_stats("tottime").print_stats(a.profile)
