@@ -146,7 +146,8 @@ def run(args: argparse.Namespace, tmp: Path) -> tuple[list[str], list[str]]:
             if time.monotonic() > deadline:
                 fusion = states.get(("global_fusion", "main"), {})
                 fail.append(f"not done {args.max_lag:g} s after the scene's end: global fusion took in "
-                            f"{fusion.get('in')} of {want} reports, at t = {fusion.get('t', 0):.1f} s")
+                            + (f"{fusion['in']} of {want} reports, at t = {fusion['t']:.1f} s" if fusion
+                               else "an unknown part of the reports (no control reply: its queue)"))
                 break
             time.sleep(0.5)
         wall = time.monotonic() - wall0
@@ -182,9 +183,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-lag", type=float, default=5.0,
                     help="s after the simulator's end by which global fusion must have every report")
     a = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory(prefix="chain-") as tmp:
-        lines, fail = run(a, Path(tmp))
+    logs = Path(tempfile.mkdtemp(prefix="network-chain-"))
+    lines, fail = run(a, logs)
     print("\n".join(lines))
+    print(f"logs of every process: {logs}")
     print("lost or late:", "; ".join(fail) if fail else "nothing")
     print("goal: >= 1 x real time, nothing lost:", "FAILED" if fail else "met")
     return 1 if fail else 0
