@@ -1,13 +1,18 @@
-"""common.radar.network.tracks: the (N, B) member, misses and cycle columns give what
-the per-track dictionaries they replaced gave (`Reference` below is that former
-bookkeeping, one Python loop per track), on random sequences of every operation."""
+"""The update path of the network fusion centre, vectorised, against what it replaced:
+common.radar.network.tracks' (N, B) member, misses and cycle columns give what the
+per-track dictionaries gave (`Reference` below is that former bookkeeping, one Python
+loop per track), on random sequences of every operation; the candidate gate of step 3
+(common.radar.network.fusion.candidate_costs, a range window first) gives the costs of
+every pair tested."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from common.core.gating import chi2_gate, pair_distances
 from common.core.track_table import Status
+from common.radar.network.fusion import candidate_costs
 from common.radar.network.params import NetworkParams
 from common.radar.network.tracks import Tracks
 
@@ -157,3 +162,32 @@ def test_columns_match_the_per_track_bookkeeping(seed: int) -> None:
             T.remove(dead)
             ref.remove(np.flatnonzero(dead).tolist())
         same(T, ref)
+
+
+def _spd(rng: np.random.Generator, n: int, m: int, scale: np.ndarray) -> np.ndarray:
+    L = rng.normal(size=(n, m, m)) * scale[None, :, None]
+    return L @ np.swapaxes(L, 1, 2) + np.diag(scale**2 * 0.1)[None]
+
+
+@pytest.mark.parametrize("m", [2, 3])
+@pytest.mark.parametrize("seed", range(10))
+def test_candidate_costs_equal_every_pair_tested(m: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n, k = int(rng.integers(1, 60)), int(rng.integers(1, 60))
+    scale = np.array([300.0, 1.0, 0.01])[:m]
+    h = np.column_stack([rng.uniform(0, 30e3, n), rng.uniform(-300, 300, n), rng.uniform(0, 6, n)])[:, :m]
+    z = h[rng.integers(n, size=k)] + rng.normal(size=(k, m)) * scale * rng.choice([1.0, 5.0], size=(k, 1))
+    z[: k // 3, 0] = rng.uniform(0, 30e3, k // 3)  # others anywhere
+    A, R = _spd(rng, n, m, scale), _spd(rng, k, m, scale)
+    ang = [2] if m == 3 else []
+    gam = chi2_gate(0.9999, m)
+    cand = np.flatnonzero(rng.random(n) < 0.7)
+    free = np.flatnonzero(rng.random(k) < 0.7)
+    if not (cand.size and free.size):
+        return
+    ti, ji = np.repeat(cand, free.size), np.tile(free, cand.size)
+    _, _, d2 = pair_distances(h, A, z, R, ti, ji, ang)
+    want = np.where(d2 <= gam, d2, np.inf).reshape(cand.size, free.size)
+    got = candidate_costs(h, A, z, R, cand, free, ang, gam)
+    assert np.isfinite(want).any()
+    np.testing.assert_array_equal(got, want)
