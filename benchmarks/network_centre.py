@@ -57,6 +57,7 @@ from common.wire.sim_messages import run_scenario  # noqa: E402
 
 SERVICE = ("global_fusion", "main")
 REPORT_PERIOD = 1.0  # s: NetworkParams.report_period of the goal scenes
+STOP_TIMEOUT = 900.0  # s: the flush at stop, on a loaded machine
 QUERY_TIMEOUT = 3600.0  # s: a control query waits in the service's queue behind the reports
 
 
@@ -179,8 +180,10 @@ def run_centre(aircraft: int, scene: Path, rec: Path, reports: int, t_last: floa
             lost.append(f"in {state['in']} of {reports}")
         lost += [f"missed {k}: {v}" for k, v in state["missed"].items() if v]
         lost += [f"rejected {k}: {v}" for k, v in state["rejected"].items() if v]
-        assert fusion.stop(timeout=60.0) == 0, "global-fusion did not stop cleanly"
-        deadline = time.monotonic() + 5.0
+        code = fusion.stop(timeout=STOP_TIMEOUT)  # it flushes its window: seconds of CPU
+        if code != 0:
+            lost.append(f"global-fusion exited with {code} at stop")
+        deadline = time.monotonic() + 30.0
         while (time.monotonic() < deadline and
                max((m["t"] for m in gtracks.of("radar/gtracks")), default=0.0) < t_last - REPORT_PERIOD):
             time.sleep(0.05)
