@@ -96,8 +96,8 @@ def losses(states: dict[tuple[str, str], dict[str, Any]], plots: int, bases: lis
         out.append(f"plotters took in {sum(plotter.values())} of {plots} plot messages")
     out += [f"tracker {b}: {tracker[b]} reports of {plotter[b]} plot messages" for b in bases
             if tracker[b] != plotter[b]]
-    fused = states.get(("global_fusion", "main"), {}).get("in", 0)
-    if fused != sum(tracker.values()):
+    fused = states.get(("global_fusion", "main"), {}).get("in")
+    if fused is not None and fused != sum(tracker.values()):
         out.append(f"global fusion took in {fused} of {sum(tracker.values())} etracks reports")
     return out
 
@@ -134,6 +134,7 @@ def run(args: argparse.Namespace, tmp: Path) -> tuple[list[str], list[str]]:
         plots = int(status["published"]) - truth
         deadline = time.monotonic() + args.max_lag
         states: dict[tuple[str, str], dict[str, Any]] = {}
+        done = False
         while True:
             watch.poll()
             # one query at a time, alive until the deadline: it waits in global fusion's
@@ -141,7 +142,8 @@ def run(args: argparse.Namespace, tmp: Path) -> tuple[list[str], list[str]]:
             states |= control.states(d.session, ROOT, timeout=max(deadline - time.monotonic(), 1.0))
             want = sum(states.get(("elementary_tracker", b), {}).get("in", -1) for b in bases)
             plot_in = sum(states.get(("channel_plotter", b), {}).get("in", -1) for b in bases)
-            if plot_in == plots and states.get(("global_fusion", "main"), {}).get("in") == want:
+            done = plot_in == plots and states.get(("global_fusion", "main"), {}).get("in") == want
+            if done:
                 break
             if time.monotonic() > deadline:
                 fusion = states.get(("global_fusion", "main"), {})
@@ -168,8 +170,9 @@ def run(args: argparse.Namespace, tmp: Path) -> tuple[list[str], list[str]]:
         lines.append(f"{k:>19} {n:>3} {cpu[k]:>8.1f} {cpu[k] / scene_s:>15.3f}")
     lines += [f"{'all':>19} {len(watch.pids):>3} {total:>8.1f} {total / scene_s:>15.3f}",
               f"cores busy: {total / scene_s:.2f} of 2 (CPU s per scene s at 1 x real time)",
-              f"wall until global fusion took in the last report: {wall:.1f} s, "
-              f"{wall - sim_wall:.1f} s after the simulator's end (its lag)",
+              (f"wall until global fusion took in the last report: {wall:.1f} s, "
+               f"{wall - sim_wall:.1f} s after the simulator's end (its lag)" if done else
+               f"global fusion not done {wall - sim_wall:.1f} s after the simulator's end"),
               f"before: {load0}; after: {load1}"]
     return lines, fail
 
