@@ -2,6 +2,7 @@
 
 Run: PYTHONPATH=. .venv/bin/python benchmarks/network_goals.py [--scenes 300 1000]
      [--seeds 1 2 3 4 5] [--duration 120] [--warm-up 30] [--scale-bases 4 8 16 32]
+     [--per-aircraft N]
 
 The in-process chain (simulator -> every base's channel plotter and elementary tracker
 -> the network fusion core, the parts of common.wire.radar_chain.RadarChain) on the
@@ -13,12 +14,15 @@ track paired with an aircraft) per 100 aircraft, position RMSE / PCRLB (RMS of t
 error over RMS of sqrt(trace) of the position bound, over the same pairs; the PCRLB is
 common.evaluation.pcrlb.pcrlb with r_b, v_b information of each base's channel, no
 azimuth, scaled per target and time by the radar-equation P_D inside the window:
-common.sim.radar.detection_probability; q, q_z of NetworkParams), mean position NEES
+common.sim.radar.detection_probability, times the number of the base's scans since the
+previous report; q, q_z of NetworkParams), mean position NEES
 and % beyond chi-square(3) 99 %, the fusion centre's CPU per base report and its
 x real time (scene seconds per CPU second). Then the CPU per scene second of each
 service against the number of bases (first n bases of a 16-receiver network,
 --scale-aircraft aircraft, seed 1) with the log-log slope. Exits 1 when a goal fails.
---pd-model fixed runs the goal scenes with Bernoulli(pd) detection instead (comparison).
+--pd-model fixed runs the goal scenes with Bernoulli(pd) detection instead (comparison);
+--per-aircraft N lists after each row the N aircraft of largest share of the squared
+error (RMSE against the bound, in z, NEES, outside the sites' hull or not).
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import Delaunay
 from scipy.stats import chi2
 
 REPO = Path(__file__).resolve().parents[1]
@@ -72,6 +77,8 @@ class Run:
     err2: list[float] = field(default_factory=list)
     nees: list[float] = field(default_factory=list)
     pairs: list[tuple[float, int]] = field(default_factory=list)  # t, truth id of err2 rows
+    ez: list[float] = field(default_factory=list)  # z error of err2 rows
+    sz2: list[float] = field(default_factory=list)  # the track's z variance of err2 rows
     truth: dict[float, np.ndarray] = field(default_factory=dict)  # report t -> rows [id, state]
 
 
@@ -132,12 +139,28 @@ def _score(run: Run, g: GlobalTracks, truth: dict[str, Any], held: dict[int, int
         held[i] = j
     e = x[c][:, POS] - X[r][:, POS]
     run.err2 += np.sum(e**2, axis=1).tolist()
+    run.ez += e[:, 2].tolist()
+    run.sz2 += P[c][:, 4, 4].tolist()
     run.nees += quadratic_form(e, P[c][:, POS][:, :, POS]).tolist()
     run.pairs += [(g.t, i) for i in ids[r].tolist()]
 
 
+def scans(base_times: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Scans of a base in each interval (t_k-1, t_k] of the report times (K,), all
+    before t_0 in the first: the bound takes one step per report, and a base scans every
+    0.5-1 s, so its information per step is that of this many scans."""
+    edges = np.searchsorted(base_times, times, side="right")
+    return np.diff(edges, prepend=0).astype(float)
+
+
 def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
     """RMSE / PCRLB over the scored pairs (module doc)."""
+    var, _ = pair_bounds(run, cfg, radar)
+    return float(np.sqrt(np.mean(run.err2)) / np.sqrt(np.mean(var)))
+
+
+def pair_bounds(run: Run, cfg: Config, radar: RadarSim) -> tuple[np.ndarray, np.ndarray]:
+    """Trace of the position PCRLB and its z variance at each scored pair."""
     times = np.array(sorted(run.truth))
     ids = np.unique(np.concatenate([v[:, 0] for v in run.truth.values()])).astype(int)
     states = np.zeros((times.size, ids.size, 6))
@@ -155,12 +178,36 @@ def bound_ratio(run: Run, cfg: Config, radar: RadarSim) -> float:
         r_t = np.linalg.norm(states[..., POS] - b.tx, axis=-1)
         r_r = np.linalg.norm(states[..., POS] - b.rx, axis=-1)
         pd[..., i] = detection_probability(r_t, r_r, ch, radar) * (r_t + r_r <= radar.rb_max)
+        pd[..., i] *= scans(radar.base_times(b.id, run.duration), times)[:, None]
     p = NetworkParams()  # the bound starts from P0 at an aircraft's first report
     J = pcrlb(times, states, present, tx, rx, np.array(info), p.q, p.q_z, P0, pd)
     var = np.trace(J[:, :, POS][:, :, :, POS], axis1=2, axis2=3)
     k = np.searchsorted(times, [t for t, _ in run.pairs])
     j = np.searchsorted(ids, [i for _, i in run.pairs])
-    return float(np.sqrt(np.mean(run.err2)) / np.sqrt(np.mean(var[k, j])))
+    return var[k, j], J[k, j, 4, 4]
+
+
+def contributors(run: Run, cfg: Config, radar: RadarSim, top: int) -> None:
+    """The `top` aircraft of largest share of the squared error: share, samples, RMSE,
+    PCRLB, z RMSE, the track's z sigma, z PCRLB (RMS over the pairs, m), mean NEES, %
+    beyond 99 %, whether outside the sites' hull in the plane (fraction of the pairs)."""
+    var, varz = pair_bounds(run, cfg, radar)
+    ids = np.array([i for _, i in run.pairs])
+    err2, ez, sz2, nees = (np.array(v) for v in (run.err2, run.ez, run.sz2, run.nees))
+    pos = np.array([run.truth[t][run.truth[t][:, 0] == i][0, [1, 3]] for t, i in run.pairs])
+    sites = np.concatenate([[b.tx[:2] for b in cfg.bases], [b.rx[:2] for b in cfg.bases]])
+    out = Delaunay(sites).find_simplex(pos) < 0
+    rows = []
+    for i in np.unique(ids):
+        m = ids == i
+        rows.append((err2[m].sum() / err2.sum(), i, m.sum(), *np.sqrt([err2[m].mean(), var[m].mean(),
+                     np.mean(ez[m] ** 2), sz2[m].mean(), varz[m].mean()]), nees[m].mean(),
+                     100.0 * np.mean(nees[m] > CHI2_99), out[m].mean()))
+    print(f"  {'share':>5} {'id':>4} {'n':>4} {'rmse':>6} {'pcrlb':>6} {'z rmse':>6} {'z sig':>6} "
+          f"{'z bnd':>6} {'nees':>6} {'>99 %':>6} {'out':>4}")
+    for r in sorted(rows, reverse=True)[:top]:
+        print(f"  {r[0]:>5.2f} {r[1]:>4d} {r[2]:>4d} " + " ".join(f"{v:>6.0f}" for v in r[3:8])
+              + f" {r[8]:>6.1f} {r[9]:>6.1f} {r[10]:>4.1f}")
 
 
 def goals(args: argparse.Namespace) -> bool:
@@ -185,6 +232,8 @@ def goals(args: argparse.Namespace) -> bool:
             print(f"{name:>5} {seed:>4} {len(cfg.bases):>5} {missed:>8.2f} {false:>7.2f} {sw:>6.1f} "
                   f"{ratio:>10.2f} {nees:>6.2f} {beyond:>6.2f} {1e3 * fus / max(run.base_reports, 1):>9.2f} "
                   f"{run.duration / max(fus, 1e-9):>6.1f}", flush=True)
+            if args.per_aircraft and run.err2:
+                contributors(run, cfg, radar, args.per_aircraft)
             ok &= bool(missed < 1 and false < 1 and sw < 1 and ratio <= 1.3 and nees <= 4.5 and beyond < 2)
     return ok
 
@@ -214,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--warm-up", type=float, default=30.0)
     ap.add_argument("--pd-model", choices=PD_MODELS, default="snr",
                     help="detection model of the goal scenes (fixed: pd alone, for comparison)")
+    ap.add_argument("--per-aircraft", type=int, default=0, metavar="N",
+                    help="after each row, the N aircraft of largest share of the squared error")
     ap.add_argument("--scale-bases", type=int, nargs="*", default=[4, 8, 16, 32])
     ap.add_argument("--scale-aircraft", type=int, default=100)
     ap.add_argument("--scale-duration", type=float, default=30.0)

@@ -5,8 +5,8 @@ scene's [sonar.tracker]) -> TMA manager (common.sonar.tma.manager.TmaManager, de
 fed from the tracker's bearing register, as services/tma is; each TMA solution is given
 back to the tracker as a hint for its later cycles, as the bearing-tracker service takes
 them from sonar/tma/<a> (common.sonar.bearing.range_noise, tma_prediction;
-run_once(..., feedback=False) without). Figures: docs/decisions/026-tma-predicted-bearing.md
-(and 018 before it).
+run_once(..., feedback=False) without). Figures: docs/decisions/028-own-state-along-the-relative-track.md
+(026 and 018 before it).
 
 Run: .venv/bin/python benchmarks/sonar_cpa.py [--runs 20] [--case NAME ...] [--mode gnn|mht ...]
 [--processes] (through a real router and the bearing-tracker and tma processes, the
@@ -28,9 +28,10 @@ time after the closest approach, its position error against the CRLB
 (common.sonar.tma.crlb, all scan times, the array's sigma0) and its NEES (4 dof).
 
 Goals (exit code 1 when one fails): one number in every run, held >= 0.9 in every run,
-a TMA solution after the approach in every run; on the scenes with an own-ship turn
-(without one the range is unobservable and the CRLB infinite): position error RMS <= 1.5
-CRLB, no run above 5 CRLB, mean NEES in [2, 8].
+a TMA solution after the approach in every run; flag: the solved runs whose solution's
+range_observable says what the scene allows (true with an own-ship turn, false without:
+there the range is unobservable and the CRLB infinite), every one; on the scenes with a
+turn: position error RMS <= 1.5 CRLB, no run above 5 CRLB, mean NEES in [2, 8].
 """
 
 from __future__ import annotations
@@ -70,7 +71,8 @@ GATE = 5.0  # sigma0
 @dataclass(frozen=True)
 class CpaRun:
     """One seeded run: track numbers on the target, fraction held confirmed, TMA solution
-    after the approach, final position error (m), its CRLB (m, inf when unobservable), NEES."""
+    after the approach, final position error (m), its CRLB (m, inf when unobservable), NEES,
+    and the solution's range_observable flag (False without a solution)."""
 
     numbers: int
     held: float
@@ -78,6 +80,7 @@ class CpaRun:
     err: float
     crlb: float
     nees: float
+    observable: bool = False
 
 
 @dataclass
@@ -198,13 +201,14 @@ def score(trace: Trace, doc: dict[str, Any], sigma0: float) -> CpaRun:
     bound = position_rms_bound(x[0], t, xy, sigma0, float(t[0]), t_eval) if turns else math.inf
     if sol is None:
         return CpaRun(len(numbers), held, False, math.nan, bound, math.nan)
+    flag = bool(sol.get("range_observable", False))
     k = int(np.searchsorted(t, sol["t"]))
     e = np.array([sol["x"], sol["y"], sol["vx"], sol["vy"]]) - x[k]
     try:
         nees = float(quadratic_form(e, np.asarray(sol["P"], float).reshape(4, 4)))
     except np.linalg.LinAlgError:  # a singular published P (unobservable range)
         nees = math.inf
-    return CpaRun(len(numbers), held, sol["t"] > t_cpa, float(np.hypot(e[0], e[1])), bound, nees)
+    return CpaRun(len(numbers), held, sol["t"] > t_cpa, float(np.hypot(e[0], e[1])), bound, nees, flag)
 
 
 def summary(runs: list[CpaRun]) -> tuple[dict[str, float], bool]:
@@ -218,8 +222,10 @@ def summary(runs: list[CpaRun]) -> tuple[dict[str, float], bool]:
            "solved": sum(r.solved_after for r in runs), "RMS/CRLB": rms_ratio,
            "max/CRLB": float(np.max(err / bnd)) if ratios else math.nan,
            "NEES": float(np.mean([r.nees for r in solved])) if solved else math.nan,
-           "CRLB m": float(np.sqrt(np.mean(np.square([r.crlb for r in runs]))))}
+           "CRLB m": float(np.sqrt(np.mean(np.square([r.crlb for r in runs])))),
+           "flag": sum(r.observable == observable for r in solved)}
     ok = row["one number"] == len(runs) and row["min held"] >= 0.9 and row["solved"] == len(runs)
+    ok &= row["flag"] == len(solved)
     if observable:
         ok &= rms_ratio <= 1.5 and row["max/CRLB"] <= 5.0 and 2.0 <= row["NEES"] <= 8.0
     return row, ok
@@ -236,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix="sonar_cpa_"))
     ok = True
     print(f"{'scene':<26}{'mode':>5}{'runs':>5}{'1 number':>9}{'min held':>9}{'solved':>7}{'CRLB m':>9}"
-          f"{'RMS/CRLB':>9}{'max/CRLB':>9}{'NEES':>9}")
+          f"{'RMS/CRLB':>9}{'max/CRLB':>9}{'NEES':>9}{'flag':>6}")
     for case, mode in [(c, m) for c in a.case for m in a.mode]:
         path = REPO / "scenarios" / f"{case}.toml"
         runs = [run_processes(path, s, mode, tmp / f"{case}-{mode}-{s}") if a.processes
@@ -244,9 +250,10 @@ def main(argv: list[str] | None = None) -> int:
         row, good = summary(runs)
         ok &= good
         print(f"{case:<26}{mode:>5}{len(runs):>5}{row['one number']:>9}{row['min held']:>9.2f}{row['solved']:>7}"
-              f"{row['CRLB m']:>9.0f}{row['RMS/CRLB']:>9.2f}{row['max/CRLB']:>9.2f}{row['NEES']:>9.2f}"
+              f"{row['CRLB m']:>9.0f}{row['RMS/CRLB']:>9.2f}{row['max/CRLB']:>9.2f}{row['NEES']:>9.2f}{row['flag']:>6}"
               f"{'' if good else '  FAIL'}", flush=True)
     print("goals met" if ok else "GOAL FAILED: one number, held >= 0.9, solved after the approach in every run; "
+          "range_observable true with a turn, false without, on every solution; "
           "with a turn RMS <= 1.5 CRLB, max <= 5 CRLB, NEES in [2, 8]")
     return 0 if ok else 1
 

@@ -104,7 +104,8 @@ def load_config(args: argparse.Namespace) -> Config:
     if args.connect:
         z = dataclasses.replace(z, connect=args.connect, listen=[])
     identity = getattr(args, "identity", None) or identity_of(
-        getattr(args, "pfusion_command", ""), getattr(args, "base", None), getattr(args, "array", None))
+        getattr(args, "pfusion_command", ""), getattr(args, "base", None), getattr(args, "array", None),
+        getattr(args, "partition", None))
     return dataclasses.replace(cfg, zenoh=dataclasses.replace(z, identity=identity))
 
 

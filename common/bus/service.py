@@ -65,6 +65,7 @@ class Service:
         self.rejected: Counter[str] = Counter()
         self.losses = LossCount(self.log)
         self.last_t: float | None = None
+        self.gauges: dict[str, Any] = {}  # a service's own fields of its metrics
         self._durations: deque[float] = deque(maxlen=2000)
         self._handlers: dict[str, Handler] = {}
         self._query_handlers: dict[str, QueryHandler] = {}
@@ -224,7 +225,7 @@ class Service:
             "p99_ms": float(np.percentile(d, 99)) if d.size else 0.0,
             "queue": self.inbox.depth,
             "up_s": time.monotonic() - self._started,
-        }
+        } | self.gauges
 
     def close(self) -> None:
         """Undeclare subscribers and queryables, linger after the last output, close the

@@ -8,7 +8,9 @@ publishes only its bases' plots and its arrays' detections, a service only its o
 metrics and liveliness keys, the read roles ``viewer`` (tracks and status) and
 ``analyst`` (everything) only read, ``operator-tma`` (``pfusion tma-input``) only
 enters TMA bounds, support values and their clearing and reads the TMA solutions and the
-tma service's acks, and only ``global-fusion`` publishes ``radar/gtracks``. Flows are
+tma service's acks, and only ``global-fusion`` publishes ``radar/gtracks`` (in a
+partitioned deployment ``global-fusion-<p>`` its ``radar/gtracks/<p>`` and the
+handovers and acks to the other partitions, docs/networks.md). Flows are
 seen from the router: *ingress* is what a client sends to it, *egress* what it sends to
 a client.
 
@@ -34,7 +36,7 @@ from typing import Any
 import zenoh
 
 from common.deploy.config import Config, ConfigError
-from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, token_name
+from common.deploy.deployment import GLOBAL_FUSION, PER_ARRAY, PER_BASE, partitions, token_name
 
 VIEWER = "viewer"
 ANALYST = "analyst"
@@ -49,7 +51,7 @@ TEST_FEEDS = ("simulate", "replay")
 OPERATOR_TMA_TOOLS = ("tma-input",)
 OPERATOR_TMA_PUTS = ("sonar/tma/bounds/*", "sonar/tma/support/*", "sonar/tma/clear/*")
 ANALYST_TOKENS = ("alive/record/*", "alive/demo/*")
-VIEWER_READS = ("radar/gtracks", "sonar/btracks/*", "sonar/tma/*", "metrics/**")
+VIEWER_READS = ("radar/gtracks", "radar/gtracks/*", "sonar/btracks/*", "sonar/tma/*", "metrics/**")
 ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
                 "liveliness_token", "declare_liveliness_subscriber", "liveliness_query"]
 
@@ -71,9 +73,12 @@ class Grant:
     watch_alive: bool = False
 
 
-def identity_of(command: str, base: str | None = None, array: str | None = None) -> str | None:
+def identity_of(command: str, base: str | None = None, array: str | None = None,
+                partition: str | None = None) -> str | None:
     """The Zenoh username of ``pfusion COMMAND`` (None: the command needs no identity or
-    must be given one, like a router)."""
+    must be given one, like a router); ``global-fusion-<partition>`` for a partition."""
+    if command == GLOBAL_FUSION and partition:
+        return f"{command}-{partition}"
     if command in PER_BASE and base:
         return f"{command}-{base}"
     if command in PER_ARRAY and array:
@@ -122,10 +127,19 @@ def grants(cfg: Config) -> dict[str, Grant]:
                                                 [f"radar/plots/{b.id}/*"])
         g[f"elementary-tracker-{b.id}"] = _service("elementary-tracker", b.id,
                                                    [f"radar/etracks/{b.id}"], [f"radar/fused/{b.id}"])
-    if cfg.bases:
+    parts = partitions(cfg)
+    for p in parts:  # docs/networks.md, "Partitions"
+        others = [o for o in parts if o != p]
+        g[f"{GLOBAL_FUSION}-{p}"] = _service(
+            GLOBAL_FUSION, p, [f"radar/gtracks/{p}"] + [f"radar/handover/{o}" for o in others]
+            + [f"radar/handover_ack/{o}" for o in others],
+            ["radar/etracks/*", f"radar/handover/{p}", f"radar/handover_ack/{p}"]
+            + [f"radar/gtracks/{o}" for o in others])
+    if cfg.bases and not parts:
         g[GLOBAL_FUSION] = _service(GLOBAL_FUSION, "main", ["radar/gtracks"], ["radar/etracks/*"])
-        g[EVALUATE] = _service(EVALUATE, "main", [],
-                               ["radar/gtracks", "sim/truth/radar", "sim/status"])
+    if cfg.bases:
+        g[EVALUATE] = _service(EVALUATE, "main", [], ["radar/gtracks", "radar/gtracks/*",
+                                                      "sim/truth/radar", "sim/status"])
     for a in cfg.arrays:
         bt = g[f"bearing-tracker-{a.id}"] = _service(
             "bearing-tracker", a.id, [f"sonar/btracks/{a.id}"],

@@ -9,12 +9,18 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
-from common.deploy.config import Config, ConfigError
+from common.deploy.config import Config, ConfigError, section
+from common.radar.network.params import NetworkParams
 
 PER_BASE = ("channel-plotter", "elementary-tracker")
 PER_ARRAY = ("bearing-tracker", "tma")
 GLOBAL_FUSION = "global-fusion"
 MIN_BASES_FOR_FUSION = 2
+
+
+def partitions(cfg: Config) -> tuple[str, ...]:
+    """The partitions of global fusion ([radar.network] partitions; empty: one instance)."""
+    return section(cfg, "radar.network", NetworkParams).partitions if cfg.bases else ()
 
 
 def token_name(command: str) -> str:
@@ -36,8 +42,8 @@ class ChildSpec:
 def plan(cfg: Config, config_path: str, available: Collection[str],
          connect: Sequence[str] = ()) -> list[ChildSpec]:
     """Every service the deployment describes whose command exists in ``available``:
-    a plotter and an elementary tracker per base, global fusion for >= 2 bases, a bearing
-    tracker and a TMA per array."""
+    a plotter and an elementary tracker per base, global fusion for >= 2 bases (one per
+    partition of a partitioned deployment), a bearing tracker and a TMA per array."""
     common = ["--config", config_path]
     for ep in connect:
         common += ["--connect", ep]
@@ -46,7 +52,10 @@ def plan(cfg: Config, config_path: str, available: Collection[str],
         for cmd in PER_BASE:
             specs.append(ChildSpec(f"{cmd}/{base.id}", (cmd, *common, "--base", base.id),
                                    f"{token_name(cmd)}/{base.id}"))
-    if len(cfg.bases) >= MIN_BASES_FOR_FUSION:
+    if len(cfg.bases) >= MIN_BASES_FOR_FUSION and partitions(cfg):
+        specs += [ChildSpec(f"{GLOBAL_FUSION}/{p}", (GLOBAL_FUSION, *common, "--partition", p),
+                            f"{token_name(GLOBAL_FUSION)}/{p}") for p in partitions(cfg)]
+    elif len(cfg.bases) >= MIN_BASES_FOR_FUSION:
         specs.append(ChildSpec(GLOBAL_FUSION, (GLOBAL_FUSION, *common),
                                f"{token_name(GLOBAL_FUSION)}/*"))
     for array in cfg.arrays:

@@ -27,6 +27,7 @@ from common.radar.fusion.report import GlobalTracks
 from common.radar.geometry.bistatic import BaseGeometry
 from common.radar.network.fusion import NetworkFusion, NetworkReport
 from common.radar.network.params import NetworkParams
+from common.radar.network.partition import Partition
 
 
 class FusionCore(Protocol):
@@ -64,14 +65,19 @@ class SingleReceiver:
 class Network:
     """NetworkFusion, driven by message time alone (`now` is not used). Its reports as
     GlobalTracks: score 0 and ambiguous false (it keeps no elementary scores and runs
-    no crossing management, docs/protocol.md)."""
+    no crossing management, docs/protocol.md). With a `partition` name, that partition
+    of [radar.network] partitions (common.radar.network.partition): its reports leave
+    out the tracks it is handing over."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams,
-                 tracker: ElementaryParams) -> None:
+                 tracker: ElementaryParams, partition: str | None = None) -> None:
         self.core = NetworkFusion(bases, params, tracker.sigma_gamma, tracker.sigma_omega)
         self.bases = tuple(b.id for b in bases)
+        self.partition = Partition(self.core, params, partition) if partition else None
 
     def _tracks(self, r: NetworkReport) -> GlobalTracks:
+        if self.partition is not None:
+            r = self.partition.visible(r)
         n = r.id.size
         return GlobalTracks(r.t, self.bases, r.id, r.status, r.x, r.P, np.zeros(n), r.member,
                             r.has, np.zeros(n, dtype=bool))
@@ -85,14 +91,25 @@ class Network:
 
 def fusion_core(bases: Sequence[BaseGeometry], fusion: FusionParams,
                 crossing: CrossingParams | None, tracker: ElementaryParams,
-                network: NetworkParams | None = None) -> FusionCore:
+                network: NetworkParams | None = None, partition: str | None = None
+                ) -> FusionCore:
     """The core of a deployment (module doc). `fusion`, `crossing`: [radar.fusion],
     [radar.fusion_crossing] of 001's core; `network`: [radar.network] of the network
     core (its defaults when None); `tracker` ([radar.tracker]): the elementary
-    trackers' Q [20], for the decorrelation of either core. Raises ValueError for bases
-    neither core can fuse."""
+    trackers' Q [20], for the decorrelation of either core; `partition`: the partition
+    of [radar.network] partitions to run (None: the whole plane; required when the
+    table names partitions). Raises ValueError for bases neither core can fuse, or a
+    partition missing, unknown, or given without partitions."""
+    network = network or NetworkParams()
+    if bool(partition) != bool(network.partitions):
+        raise ValueError(f"[radar.network] partitions {list(network.partitions)}: "
+                         + ("run one global fusion per partition (--partition NAME)"
+                            if network.partitions else f"no partition {partition!r}"))
     rx = np.array([b.rx for b in bases], dtype=float).reshape(-1, 3)
     if all(b.azimuth for b in bases) and (not len(bases) or np.ptp(rx, axis=0).max() <= 1e-6):
+        if partition:
+            raise ValueError("partitions need the network core (several receivers or "
+                             "range-Doppler bases)")
         return SingleReceiver(GlobalFusion(bases, fusion, crossing, tracker))
     receivers = np.unique(np.round(rx, 3), axis=0).shape[0]
     if len(bases) < 3 or receivers < 2:
@@ -102,4 +119,4 @@ def fusion_core(bases: Sequence[BaseGeometry], fusion: FusionParams,
                          f"{len(bases)} bases over {receivers} receiver(s)"
                          + (f", {', '.join(no_az)} declared azimuth = false (range-Doppler)"
                             if no_az else ""))
-    return Network(bases, network or NetworkParams(), tracker)
+    return Network(bases, network, tracker, partition)

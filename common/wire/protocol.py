@@ -105,6 +105,12 @@ GTRACK = {
     "alt": Field("float", optional=True, together="geo"),
 }
 GTRACKS = {"v": V, "t": T, "tracks": Field("maps", sub=GTRACK)}
+# a network track handed over between partitions of global fusion (docs/networks.md)
+HANDED = {"id": Field("int", nonneg=True), "status": Field("str", choices=TRACK_STATUS),
+          "x": Field("floats", length=6), "P": Field("floats", length=36), "t_update": T,
+          "born": T, "hits": Field("int", nonneg=True), "etracks": Field("pairs")}
+HANDOVER = {"v": V, "t": T, "from": ID, "to": ID, "track": Field("map", sub=HANDED)}
+HANDOVER_ACK = {"v": V, "t": T, "from": ID, "to": ID, "id": Field("int", nonneg=True)}
 DETECTIONS = {
     "v": V, "t": T, "seq": SEQ, "array": ID, "own": Field("map", sub=OWN_SHIP),
     "brg": _col(angle=True), "amp": _col(), "sbrg": _col(optional=True, positive=True),
@@ -190,7 +196,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "detections": DETECTIONS, "truth_radar": TRUTH_RADAR, "truth_sonar": TRUTH_SONAR,
     "sim_status": SIM_STATUS, "btracks": BTRACKS, "history": HISTORY,
     "tma": TMA, "tma_bounds": TMA_BOUNDS, "tma_support": TMA_SUPPORT,
-    "tma_clear": TMA_CLEAR, "tma_ack": TMA_ACK,
+    "tma_clear": TMA_CLEAR, "tma_ack": TMA_ACK, "handover": HANDOVER,
+    "handover_ack": HANDOVER_ACK,
 }
 
 # Key layout under the root -> message kind ("*" = one chunk: a base, channel, array, id).
@@ -199,6 +206,9 @@ KEY_KINDS: tuple[tuple[tuple[str, ...], str], ...] = (
     (("radar", "fused", "*"), "fused"),
     (("radar", "etracks", "*"), "etracks"),
     (("radar", "gtracks"), "gtracks"),
+    (("radar", "gtracks", "*"), "gtracks"),
+    (("radar", "handover", "*"), "handover"),
+    (("radar", "handover_ack", "*"), "handover_ack"),
     (("sonar", "detections", "*"), "detections"),
     (("sonar", "btracks", "*"), "btracks"),
     (("sonar", "history", "*", "*"), "history"),

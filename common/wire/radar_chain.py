@@ -28,17 +28,17 @@ from common.radar.plots.channel_fusion import PlotFusion, PlotterParams
 from common.wire.radar_messages import gtracks_message, plots_of
 
 
-def global_fusion(cfg: Config) -> FusionCore:
+def global_fusion(cfg: Config, partition: str | None = None) -> FusionCore:
     """The global fusion core of a deployment (common.radar.fusion_core.fusion_core):
     [radar.fusion], [radar.fusion_crossing] (the sup-norm test of 004 when absent),
     [radar.network] (a network's fusion centre) and [radar.tracker] (for the
-    decorrelation). Raises ValueError if the bases cannot be
-    fused."""
+    decorrelation); `partition`: the partition of [radar.network] partitions to run.
+    Raises ValueError if the bases cannot be fused or the partition is wrong."""
     crossing = (section(cfg, "radar.fusion_crossing", FusionCrossingParams)
                 if "fusion_crossing" in cfg.doc.get("radar", {}) else None)
     return fusion_core(cfg.bases, section(cfg, "radar.fusion", FusionParams), crossing,
                        section(cfg, "radar.tracker", ElementaryParams),
-                       section(cfg, "radar.network", NetworkParams))
+                       section(cfg, "radar.network", NetworkParams), partition)
 
 
 class RadarChain:

@@ -21,6 +21,7 @@ from common.core.track_table import STATUS_NAME, Status
 from common.radar.elementary.tracker import ElementaryTracks
 from common.radar.fusion.report import GlobalTracks
 from common.radar.geometry.geodesy import LocalFrame
+from common.radar.network.partition import Handed
 from common.radar.plots.channel_fusion import Plots
 from common.wire import protocol
 
@@ -168,3 +169,30 @@ def confirmed_tracks(msg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.nd
     return (np.array([k["id"] for k in conf], dtype=np.int64),
             np.array([k["x"] for k in conf], dtype=float).reshape(-1, 6),
             np.array([k["P"] for k in conf], dtype=float).reshape(-1, 6, 6))
+
+
+def handover_message(sender: str, to: str, h: Handed) -> dict[str, Any]:
+    """The `radar/handover/<to>` message of a track that partition `sender` hands over."""
+    return {"v": protocol.VERSION, "t": h.t, "from": sender, "to": to, "track": {
+        "id": h.number, "status": STATUS_NAME[Status(h.status)], "x": h.x.tolist(),
+        "P": h.P.reshape(36).tolist(), "t_update": h.t_update, "born": h.born, "hits": h.hits,
+        "etracks": [list(m) for m in h.members]}}
+
+
+def handed_of(payload: bytes) -> tuple[str, str, Handed]:
+    """Sender, receiver and track of a `radar/handover/<to>` payload (DecodeError)."""
+    msg = protocol.decode("handover", payload)
+    k = msg["track"]
+    return msg["from"], msg["to"], Handed(
+        k["id"], STATUS_CODE[k["status"]], msg["t"], k["x"], k["P"].reshape(6, 6),
+        k["t_update"], k["born"], k["hits"], tuple(k["etracks"]))
+
+
+def handover_ack_message(sender: str, to: str, t: float, number: int) -> dict[str, Any]:
+    """The `radar/handover_ack/<to>` message: partition `sender` holds track `number`."""
+    return {"v": protocol.VERSION, "t": t, "from": sender, "to": to, "id": number}
+
+
+def claimed_members(payload: bytes) -> list[tuple[str, int]]:
+    """The (base, elementary id) members of every track of a `radar/gtracks` payload."""
+    return [m for k in protocol.decode("gtracks", payload)["tracks"] for m in k["etracks"]]

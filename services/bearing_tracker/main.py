@@ -5,7 +5,7 @@ answers root/sonar/history/A/<id> with the bearing register of a confirmed track
 (docs/protocol.md; in the multiple-hypothesis mode the detections of the retrodicted
 main hypothesis, with the retrodicted bearings beside). Also subscribes
 root/sonar/tma/A: each solution is kept as its track's hint for the later cycles
-(common.sonar.bearing.range_noise, tma_prediction; docs/decisions/026); a tma message
+(common.sonar.bearing.range_noise, tma_prediction; docs/decisions/026, 028); a tma message
 publishes nothing, so the loop tracker -> tma -> tracker is one step per detection list,
 never waited for. Parameters:
 [sonar.tracker] (SonarTrackerParams; mode_association "gnn" or "mht"),

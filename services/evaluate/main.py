@@ -3,7 +3,8 @@ at the end: GOSPA (with switching term) and OSPA, track number switches and brea
 (common.evaluation.metrics; per step, and on the assignment minimised over the whole
 run, common.evaluation.trajectory_gospa), position RMSE against the PCRLB and NEES (common.evaluation.pcrlb).
 
-Subscribes radar/gtracks, sim/truth/radar and sim/status; pairs tracks and truth by
+Subscribes radar/gtracks (in a partitioned deployment every radar/gtracks/<p>, scoring
+their union: common.wire.gtracks_union), sim/truth/radar and sim/status; pairs tracks and truth by
 message time (common.evaluation.pairing); only confirmed global tracks are scored; with
 no step scored it says so and exits 1. Stops on SIGTERM/SIGINT, or
 once sim/status says "done" and nothing arrived for --quiet seconds; then prints the
@@ -32,6 +33,7 @@ from common.bus.service import Service
 from common.cli import add_common, load_config
 from common.core.rejection import Rejected
 from common.deploy.config import Config, section
+from common.deploy.deployment import partitions
 from common.evaluation.adsb import AdsbScoring, AdsbTruth
 from common.evaluation.metrics import count_switches
 from common.evaluation.pairing import StepPairing
@@ -39,6 +41,7 @@ from common.evaluation.pcrlb import Evaluation, base_information, score_targets
 from common.radar.fusion.params import FusionParams
 from common.sim.scenario import radar_scene
 from common.wire import protocol
+from common.wire.gtracks_union import GtracksUnion, partition_of
 from common.wire.radar_messages import confirmed_tracks
 from common.wire.sim_messages import truth_state
 from services.evaluate.adsb_input import read_fixes, recorded_gtracks
@@ -156,11 +159,14 @@ def main_adsb(args: argparse.Namespace, cfg: Config) -> int:
         svc = Service("evaluate", "main", cfg)
         seen = _live(svc, args.quiet)
 
+        union = GtracksUnion(partitions(cfg))
+
         def on_gtracks(key: str, payload: bytes) -> None:
             seen()
-            score(protocol.decode("gtracks", payload))
+            for g in union.push(partition_of(key, svc.root), protocol.decode("gtracks", payload)):
+                score(g)
 
-        svc.subscribe("radar/gtracks", on_gtracks)
+        svc.subscribe(gtracks_key(cfg), on_gtracks)
         code = svc.run()
         rejects.update(svc.rejected)
     if not scoring.ev.metrics.times:
@@ -168,6 +174,11 @@ def main_adsb(args: argparse.Namespace, cfg: Config) -> int:
         return code or 1
     print(report(scoring.ev, cfg, args.settle, truth.hexes) + "\n" + adsb_report(scoring, rejects), flush=True)
     return code
+
+
+def gtracks_key(cfg: Config) -> str:
+    """The global tracks' key: each partition's (their union is scored) or the one."""
+    return "radar/gtracks/*" if partitions(cfg) else "radar/gtracks"
 
 
 def main(args: argparse.Namespace) -> int:
@@ -198,12 +209,15 @@ def main(args: argparse.Namespace) -> int:
         seen()
         score(pairing.truth(m["t"], m))
 
+    union = GtracksUnion(partitions(cfg))
+
     def on_gtracks(key: str, payload: bytes) -> None:
         g = protocol.decode("gtracks", payload)
         seen()
-        score(pairing.tracks(g["t"], g))
+        for u in union.push(partition_of(key, svc.root), g):
+            score(pairing.tracks(u["t"], u))
 
-    svc.subscribe("radar/gtracks", on_gtracks)
+    svc.subscribe(gtracks_key(cfg), on_gtracks)
     svc.subscribe("sim/truth/radar", on_truth)
     code = svc.run()
     if not ev.metrics.times:

@@ -1,7 +1,8 @@
 """``pfusion export --geojson OUT``: the global picture of a geodetic deployment as RFC
 7946 GeoJSON (common.wire.geojson): the sites, and the tracks of the last radar/gtracks
 message with their 2-sigma ellipses and trails, from a recording (``--recording``) or
-live (subscribing for ``--seconds``)."""
+live (subscribing for ``--seconds``). In a partitioned deployment the tracks are the
+union of the latest radar/gtracks/<p> of every partition (common.wire.gtracks_union)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from common.bus.transport import open_session, stop_on_signals
 from common.cli import add_common, load_config
 from common.wire import protocol
 from common.wire.geojson import TrackHistory
+from common.wire.gtracks_union import GtracksUnion, partition_of
 
 log = logging.getLogger("export")
 
@@ -32,12 +34,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _record(history: TrackHistory, path: Path) -> int:
     """Ingest the recording's gtracks; the number of undecodable ones."""
     bad = 0
+    union = GtracksUnion(())
     with path.open("rb") as f:
         reader = RecordReader(f)
         for rec in reader:
             if protocol.kind_of(rec.key, reader.root) == "gtracks":
                 try:
-                    history.ingest(protocol.decode("gtracks", rec.payload))
+                    msg = protocol.decode("gtracks", rec.payload)
+                    history.ingest(union.latest(partition_of(rec.key, reader.root), msg))
                 except protocol.DecodeError as e:
                     bad += 1
                     log.error("%s: %s", rec.key, e)
@@ -47,24 +51,28 @@ def _record(history: TrackHistory, path: Path) -> int:
 def _live(history: TrackHistory, args: argparse.Namespace) -> int:
     """Ingest live gtracks for args.seconds; the number of undecodable ones."""
     cfg = load_config(args)
-    q: queue.Queue[bytes] = queue.Queue()
+    q: queue.Queue[tuple[str, bytes]] = queue.Queue()
     stop = stop_on_signals()
     bad = 0
+    union = GtracksUnion(())
+    root = cfg.zenoh.root
     with open_session(cfg.zenoh) as session:
-        sub = session.declare_subscriber(f"{cfg.zenoh.root}/radar/gtracks",
-                                         lambda s: q.put(s.payload.to_bytes()))
+        subs = [session.declare_subscriber(f"{root}/{k}", lambda s: q.put(
+            (str(s.key_expr), s.payload.to_bytes()))) for k in ("radar/gtracks", "radar/gtracks/*")]
         end = time.monotonic() + args.seconds
         while not stop.is_set() and time.monotonic() < end:
             try:
-                payload = q.get(timeout=0.1)
+                key, payload = q.get(timeout=0.1)
             except queue.Empty:
                 continue
             try:
-                history.ingest(protocol.decode("gtracks", payload))
+                msg = protocol.decode("gtracks", payload)
+                history.ingest(union.latest(partition_of(key, root), msg))
             except protocol.DecodeError as e:
                 bad += 1
                 log.error("radar/gtracks: %s", e)
-        sub.undeclare()
+        for sub in subs:
+            sub.undeclare()
     return bad
 
 

@@ -35,6 +35,7 @@ from common.cli import add_common, load_config
 from common.deploy.config import ConfigError
 from common.wire import protocol
 from common.wire.geojson import collection, site_features, track_features, view_shapes
+from common.wire.gtracks_union import GtracksUnion, partition_of
 from common.wire.view_model import ViewModel
 from services.view.access import Access, is_loopback, read_token
 from services.view.server import STALE_S, Hub, app
@@ -42,7 +43,7 @@ from services.view.server import STALE_S, Hub, app
 ALIVE_PERIOD_S = 1.0
 LATEST_ONLY = {"gtracks", "etracks", "truth_radar", "tma", "truth_sonar"}
 GEOJSON_PATH = "/tracks.geojson"
-KEYS = ("radar/gtracks", "radar/etracks/*", "sim/truth/*", "sim/status", "sonar/detections/*",
+KEYS = ("radar/gtracks", "radar/gtracks/*", "radar/etracks/*", "sim/truth/*", "sim/status", "sonar/detections/*",
         "sonar/btracks/*", "sonar/tma/*")
 log = logging.getLogger("view")
 
@@ -70,6 +71,7 @@ class Feed:
                  loop: asyncio.AbstractEventLoop) -> None:
         self.session, self.hub, self.root, self.loop = session, hub, root, loop
         self.data, self.metrics_inbox = Inbox(), Inbox()
+        self.gtracks = GtracksUnion(())
         self.metrics: dict[tuple[str, str], dict[str, Any]] = {}
         self.wake = asyncio.Event()
         self.subs = [session.declare_subscriber(f"{root}/{k}", self._on_data) for k in KEYS]
@@ -112,6 +114,8 @@ class Feed:
             msg = protocol.decode(kind, env.payload)
             if kind == "sim_status":
                 self.hub.model.sim_status(msg, time.monotonic())
+            elif kind == "gtracks":  # a partition's own tracks: the union of all (docs/networks.md)
+                self.hub.model.ingest(kind, self.gtracks.latest(partition_of(env.key, self.root), msg))
             else:
                 self.hub.model.ingest(kind, msg)
         except ValueError as e:  # DecodeError, or a base the deployment lacks

@@ -38,6 +38,34 @@ def test_q_is_raised_by_the_bearing_acceleration_bound() -> None:
     assert rn.hints == {}
 
 
+def test_a_reused_number_does_not_inherit_the_old_tracks_hint() -> None:
+    """The single-hypothesis tracker reuses a deleted track's number: the new track must not
+    predict with the old one's TMA solution (seen on sonar_cpa_coarse gnn seed 3: a track
+    opened in the cycle its number's confirmed track was deleted kept that track's hint), and
+    a solution published later for the old track (older than the new track's birth) is refused."""
+    rn = RangeNoise()
+    rn.set(4, TmaHint(100.0, 0.0, 1000.0, 10.0, 0.0, converged=True))
+    rn.born(np.array([4]), 160.0)
+    assert rn.hints == {}
+    rn.set(4, TmaHint(100.0, 0.0, 1000.0, 10.0, 0.0, converged=True))  # late, for the old track
+    assert rn.hints == {}
+    rn.set(4, TmaHint(160.0, 0.0, 1000.0, 10.0, 0.0, converged=True))  # solved for the new track
+    assert 4 in rn.hints
+
+
+def test_the_tracker_drops_the_hint_of_a_number_it_reopens() -> None:
+    p = TrackerParams(mode="broadband", crossing=False)
+    tr = BearingTracker(p, "cylindrical", math.radians(2.0))
+    c = tr.step(0.0, np.array([1.0]), np.array([100.0]), 0.0)
+    number = int(c.ids[0])
+    tr.tma_hint(number, TmaHint(0.0, 1500.0, 1000.0, -8.0, 0.0, converged=True))
+    t = 0.0
+    while number in tr.step(t := t + 60.0, np.zeros(0), np.zeros(0), 0.0).ids:  # deleted by misses
+        pass
+    c = tr.step(t + 60.0, np.array([2.0]), np.array([100.0]), 0.0)
+    assert number in c.ids.tolist() and number not in tr.range_noise.hints
+
+
 def test_hint_widens_the_prediction_never_moves_it() -> None:
     p = TrackerParams(mode="broadband", crossing=False)
     runs = []
@@ -64,3 +92,19 @@ def test_close_approach_with_a_turn_fast_subset(mode: str) -> None:
         r = run_once(REPO / "scenarios" / "sonar_cpa_fine_1km_turn.toml", seed, mode)
         assert r.numbers == 1 and r.held >= 0.9 and r.solved_after
         assert r.err <= 5.0 * r.crlb and r.nees < 30.0
+
+
+def test_the_benchmark_checks_range_observable_without_a_turn() -> None:
+    """benchmarks/sonar_cpa.py's goals: without an own-ship turn (CRLB infinite) every
+    solution must say range_observable false, with one true; RMS is checked with a turn only."""
+    sys.path.insert(0, str(REPO))
+    from benchmarks.sonar_cpa import CpaRun, summary
+
+    def runs(crlb: float, flag: bool, err: float = 10.0) -> list[CpaRun]:
+        return [CpaRun(1, 1.0, True, err, crlb, 4.0, flag) for _ in range(4)]
+
+    assert summary(runs(math.inf, False, err=1e6))[1]
+    assert not summary(runs(math.inf, True))[1]
+    assert summary(runs(100.0, True))[1]
+    assert not summary(runs(100.0, False))[1]
+    assert not summary(runs(100.0, True, err=1e6))[1]

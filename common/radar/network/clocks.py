@@ -17,7 +17,14 @@ order, with the estimate's own uncertainty:
 A common offset of every base is a shift of the network's time: unobservable from the
 ranges; the tracks then run in a time frame shifted by it (they move along their own
 path). Bases declared as references (clocks trusted, e.g. GPS-disciplined) keep c_b = 0
-and V_b = 0: they anchor that common part.
+and V_b = 0: they anchor that common part. Without a reference, the mean of the
+estimates is that common part, which the per-base filters move at random (each takes
+the tracks, made of the other bases, as its reference), and the network's time is
+anchored to the mean of its clocks instead: [C3] applies
+
+    c^_b - mean_k c^_k                                                           [C4]
+
+so that the applied offsets have mean 0 (docs/decisions/024-network-altitude.md).
 """
 
 from __future__ import annotations
@@ -41,9 +48,16 @@ class Clocks:
     def correct(self, b: int, z: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """[C3] on z (N, m) [r_b, v_b, ...] and R (N, m, m) of base b; copies."""
         z, R = z.copy(), R.copy()
-        z[:, 0] += z[:, 1] * self.c[b]
+        z[:, 0] += z[:, 1] * self.applied(b)
         R[:, 0, 0] += z[:, 1] ** 2 * max(self.V[b], self.floor[b])
         return z, R
+
+    def applied(self, b: int) -> float:
+        """The offset [C3] applies to base b: c^_b, less the mean of the estimates when
+        no base is a reference [C4]."""
+        if self.reference.any():
+            return float(self.c[b])
+        return float(self.c[b] - self.c.mean())
 
     def update(self, b: int, t: float, v: np.ndarray, y: np.ndarray, S: np.ndarray) -> None:
         """[C1]-[C2] at t from range rates v (K,), range innovations y (K,) of corrected

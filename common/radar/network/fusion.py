@@ -29,7 +29,7 @@ time t (no common scan time):
 from __future__ import annotations
 
 import heapq
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,7 +86,9 @@ def candidate_costs(h: np.ndarray, A: np.ndarray, z: np.ndarray, R: np.ndarray, 
 class NetworkFusion:
     """The fusion centre (module doc); `rejected` counts refused reports by reason,
     `waiting` the seed cells deferred by max_cells, `merged` the tracks merged into
-    another."""
+    another. Hooks of a partition (common.radar.network.partition): `region(x)` whether
+    a fix may open a track here (None: everywhere), `excluded` the (base, elementary id)
+    pairs held by other partitions, left out of initiation."""
 
     def __init__(self, bases: Sequence[BaseGeometry], params: NetworkParams | None = None,
                  sigma_gamma: float = 5.0, sigma_omega: float = 1e-3) -> None:
@@ -116,6 +118,8 @@ class NetworkFusion:
         self.waiting = 0
         self.rounds = 0
         self.merged = 0
+        self.region: Callable[[np.ndarray], bool] | None = None
+        self.excluded: set[tuple[int, int]] = set()
 
     def _reject(self, reason: str, detail: str) -> Rejected:
         self.rejected[reason] = self.rejected.get(reason, 0) + 1
@@ -197,6 +201,8 @@ class NetworkFusion:
         for b, tr in self.last.items():
             dt = t - tr.t
             keep = (tr.status == Status.CONFIRMED) & (self.tracks.is_member(b, tr.id) == members)
+            if self.excluded and not members:
+                keep &= ~np.array([(b, int(e)) in self.excluded for e in tr.id], dtype=bool)
             if dt > self.p.stale or not keep.any():
                 continue
             F = bistatic_F(dt)[:3, :3]
@@ -243,7 +249,7 @@ class NetworkFusion:
         self.waiting += waiting
         for c in range(opened.members.shape[0]):
             x, P = opened.fix.x[c], opened.fix.P[c]
-            if self.tracks.near(t, x, P):
+            if self.tracks.near(t, x, P) or (self.region is not None and not self.region(x)):
                 continue
             mem = [(int(b), int(left.eid[i])) for b, i in enumerate(opened.members[c]) if i >= 0]
             self.tracks.open(t, x, P, mem)

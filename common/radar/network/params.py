@@ -3,10 +3,21 @@ common.radar.network (docs/networks.md)."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import ClassVar
 
-from common.core.params import PROB_OPEN, Params, Range, Rule, count, non_negative, order, positive
+from common.core.params import (
+    PROB_OPEN,
+    Params,
+    Range,
+    Rule,
+    count,
+    non_negative,
+    order,
+    positive,
+    unbounded,
+)
 
 
 @dataclass(frozen=True)
@@ -46,6 +57,16 @@ class NetworkParams(Params):
     report_period: period of the global track reports.
     merge_distance: plane distance within which two confirmed tracks with disjoint bases
         are tested as one aircraft's (common.radar.network.duplicates); 0: never.
+    partitions: names of the regions global fusion is split into, one instance each
+        (`pfusion global-fusion --partition NAME`, common.radar.network.partition), in
+        ascending order along partition_axis; empty: one instance, no partition.
+    partition_axis: "x" (East) or "y" (North): the ENU axis the regions split.
+    partition_splits: the boundaries between consecutive regions along that axis (one
+        fewer than partitions, ascending; unused without partitions).
+    partition_margin: hysteresis: a confirmed track is handed over to the region it is
+        in once it is this far beyond its partition's region.
+    handover_timeout: message time after which an unacknowledged handover is given up
+        (the track is kept, counted, and handed over again while still outside).
     """
 
     window: float = 2.0
@@ -75,6 +96,11 @@ class NetworkParams(Params):
     coast_tentative: float = 2.0
     report_period: float = 1.0
     merge_distance: float = 10e3
+    partitions: tuple[str, ...] = ()
+    partition_axis: str = "x"
+    partition_splits: tuple[float, ...] = (0.0,)
+    partition_margin: float = 5e3
+    handover_timeout: float = 5.0
 
     RANGES: ClassVar[dict[str, Range]] = {
         "window": non_negative("s"), "decor_gate": positive("chi-square"),
@@ -88,8 +114,19 @@ class NetworkParams(Params):
         "max_sigma": positive("m"), "cycle": positive("s"), "confirm_cycles": count(1),
         "coast": positive("s"), "coast_tentative": positive("s"), "report_period": positive("s"),
         "merge_distance": non_negative("m"),
+        "partition_splits": unbounded("m", "an ENU coordinate"),
+        "partition_margin": non_negative("m"), "handover_timeout": positive("s"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
         order("z_min", "z_max"), order("cell_fine", "cell_coarse", strict=False),
         order("coast_tentative", "coast", strict=False),
+        Rule(("partition_axis",), lambda a: a in ("x", "y"), 'partition_axis "x" or "y"'),
+        Rule(("partitions", "partition_splits"),
+             lambda n, s: not n or (len(n) >= 2 and len(set(n)) == len(n)
+                                                 and len(s) == len(n) - 1
+                                                 and all(a < b for a, b in zip(s, s[1:]))),
+             "no partitions, or >= 2 distinct partitions and one fewer ascending "
+             "partition_splits"),
+        Rule(("partitions",), lambda n: all(re.fullmatch(r"[A-Za-z0-9_.-]+", k) for k in n),
+             "partition names of letters, digits, '_', '.', '-' (Zenoh key chunks)"),
     )

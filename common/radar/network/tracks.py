@@ -36,6 +36,7 @@ class Tracks:
         n_b = receiver.size
         self.on_receiver = (receiver[:, None] == np.unique(receiver)[None]).astype(np.int64)
         self.next_id = 1
+        self.id_step = 1
         self.id = np.zeros(0, dtype=np.int64)
         self.status = np.zeros(0, dtype=np.int64)
         self.x = np.zeros((0, 6))
@@ -51,6 +52,15 @@ class Tracks:
 
     def __len__(self) -> int:
         return int(self.id.size)
+
+    def _row(self, tid: int) -> int:
+        return int(np.searchsorted(self.id, tid))
+
+    @property
+    def owner(self) -> dict[tuple[int, int], int]:
+        """{(base, elementary id): track number} of every member (partitions)."""
+        r, b = np.nonzero(self.member != NONE)
+        return {(int(bb), int(self.member[rr, bb])): int(self.id[rr]) for rr, bb in zip(r.tolist(), b.tolist())}
 
     @property
     def members(self) -> list[dict[int, int]]:
@@ -113,19 +123,34 @@ class Tracks:
 
     def open(self, t: float, x: np.ndarray, P: np.ndarray, members: list[tuple[int, int]]) -> None:
         """A tentative track at t with its members."""
+        self.insert(self.next_id, Status.TENTATIVE, t, x, P, t, t, 0, members)
+        self.next_id += self.id_step
+
+    def striped(self, first: int, step: int) -> None:
+        """Number new tracks first, first + step, ... (partitions: unique across them)."""
+        self.next_id, self.id_step = first, step
+
+    def row_of(self, tid: int) -> int:
+        """Row of track number tid, or -1."""
+        r = self._row(tid)
+        return r if r < len(self) and self.id[r] == tid else -1
+
+    def insert(self, tid: int, status: int, t: float, x: np.ndarray, P: np.ndarray,
+               t_update: float, born: float, hits: int, members: list[tuple[int, int]]) -> None:
+        """Track number tid with its state (a handed-over track), in id order; members
+        already held by another track are left out (and a second one of a base)."""
+        r = self._row(tid)
         n_b = self.receiver.size
-        member = np.full((1, n_b), NONE, dtype=np.int64)
+        member = np.full(n_b, NONE, dtype=np.int64)
         for b, e in members:
-            member[0, b] = e
-        new = {"id": self.next_id, "status": Status.TENTATIVE, "x": x[None], "P": P[None],
-               "t": t, "t_update": t, "born": t, "hits": 0, "cycle_start": t, "member": member,
-               "misses": np.zeros((1, n_b), dtype=np.int64),
-               "cycle_hit": np.zeros((1, n_b), dtype=bool)}
+            if member[b] == NONE and self.rows_of(b, np.array([e]))[0] < 0:
+                member[b] = e
+        new = {"id": tid, "status": status, "x": x, "P": P, "t": t, "t_update": t_update,
+               "born": born, "hits": hits, "cycle_start": t, "member": member,
+               "misses": np.zeros(n_b, dtype=np.int64), "cycle_hit": np.zeros(n_b, dtype=bool)}
         for name in ROW_COLUMNS:
             col = getattr(self, name)
-            setattr(self, name, np.concatenate([col, np.asarray(new[name], dtype=col.dtype).reshape(
-                (1, *col.shape[1:]))]))
-        self.next_id += 1
+            setattr(self, name, np.insert(col, r, np.asarray(new[name], dtype=col.dtype), axis=0))
 
     def near(self, t: float, x: np.ndarray, P: np.ndarray) -> bool:
         """A track whose predicted position is within the chi-square(3) gate of x."""

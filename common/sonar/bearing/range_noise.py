@@ -13,8 +13,9 @@ q_theta + a^2 T, a = v^2 / r_min^2, r_min the least range of the solution over t
 acceleration power matching a held over T seconds.
 
 Guard of the noise: it widens the model's covariance only, never moves its mean; a hint is
-used for ``max_age`` seconds after its time, and only by the track number it was solved for
-(the prediction's own guards: tma_prediction).
+used for ``max_age`` seconds after its time, and only by the track it was solved for: a
+number reopened for a new track drops its hint, and a later hint older than that birth is
+refused (the prediction's own guards: tma_prediction).
 
 Data flow: the TMA service solves on the tracker's cycles and registers; its solutions
 come back to the tracker as a hint for later cycles only (the tracker never waits for
@@ -37,12 +38,21 @@ class RangeNoise:
         self.max_age = max_age
         self.r_floor = r_floor
         self.hints: dict[int, TmaHint] = {}
+        self.births: dict[int, float] = {}
         self.own: tuple[float, float, float] | None = None
         self.prev: tuple[float, float, float] | None = None
 
     def set(self, track: int, hint: TmaHint) -> None:
-        """The latest TMA solution of a track number."""
-        self.hints[track] = hint
+        """The latest TMA solution of a track number; one older than the number's last
+        birth (:meth:`born`) was solved for an earlier track under that number: dropped."""
+        if hint.t >= self.births.get(track, -np.inf):
+            self.hints[track] = hint
+
+    def born(self, ids: np.ndarray, t: float) -> None:
+        """Track numbers ``ids`` (re)opened at t: a reused number drops its hint."""
+        for k in np.asarray(ids).tolist():
+            self.hints.pop(int(k), None)
+            self.births[int(k)] = t
 
     def cycle(self, t: float, own_x: float, own_y: float) -> None:
         """The own position of the cycle ending at t (call once per cycle, first)."""
@@ -58,28 +68,27 @@ class RangeNoise:
         return np.array([(h := self._fresh(int(k), t)) is not None and h.converged
                          for k in np.asarray(ids).tolist()], dtype=bool)
 
-    def predictions(self, ids: np.ndarray, x0: np.ndarray, P0: np.ndarray, x1: np.ndarray, P1: np.ndarray,
-                    q_block: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The tracks ``ids`` (N,) predicted from their hints (common.sonar.bearing.tma_prediction):
-        their positions k (K,) in ids, [theta, theta'] (K, 2) and covariances + q_block (K, 2, 2);
-        x0, P0: [theta, theta'] of the previous cycle, x1, P1: the model's prediction."""
+    def predictions(self, ids: np.ndarray, x0: np.ndarray, P0: np.ndarray, x1: np.ndarray, P1: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The tracks ``ids`` (N,) predicted with their hints (common.sonar.bearing.tma_prediction):
+        their positions k (K,) in ids, [theta, theta'] (K, 2), covariances (K, 2, 2) and
+        linearised bearing transitions (K, 2, 2); x0, P0: [theta, theta'] of the previous
+        cycle, x1, P1: the model's prediction (with Q)."""
         pos: list[int] = []
-        means: list[np.ndarray] = []
-        covs: list[np.ndarray] = []
+        out: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         if self.prev is not None and self.own is not None and self.hints and self.own[0] > self.prev[0]:
             (t0, ox0, oy0), (t, ox, oy) = self.prev, self.own
-            qb = np.broadcast_to(q_block, (len(ids), 2, 2))
             for i, k in enumerate(np.asarray(ids).tolist()):
                 h = self._fresh(int(k), t)
-                out = None if h is None else predict(h, t0, np.array([ox0, oy0]), t, np.array([ox, oy]),
-                                                     x0[i], P0[i], x1[i], P1[i])
-                if out is not None:
+                o = None if h is None else predict(h, t0, np.array([ox0, oy0]), t, np.array([ox, oy]),
+                                                   x0[i], P0[i], x1[i], P1[i])
+                if o is not None:
                     pos.append(i)
-                    means.append(out[0])
-                    covs.append(out[1] + qb[i])
+                    out.append(o)
         if not pos:
-            return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2))
-        return np.asarray(pos, np.intp), np.asarray(means), np.asarray(covs)
+            return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2, 2))
+        m, C, F = (np.asarray(a) for a in zip(*out))
+        return np.asarray(pos, np.intp), m, C, F
 
     def q_theta(self, ids: np.ndarray, q: float) -> np.ndarray:
         """Bearing noise power (N,) of the tracks ``ids`` for the cycle of :meth:`cycle`: q,
@@ -112,3 +121,4 @@ class RangeNoise:
         """Drop the hints of track numbers not in ``keep``."""
         live = set(np.asarray(keep).tolist())
         self.hints = {k: h for k, h in self.hints.items() if k in live}
+        self.births = {k: b for k, b in self.births.items() if k in live}

@@ -1,33 +1,39 @@
-"""Bearing and bearing rate predicted from a contact's TMA solution (issue 31, contacts that
-pass close; docs/equations.md "TMA-predicted bearing"; docs/decisions/026-tma-predicted-bearing.md).
+"""Bearing and bearing rate predicted with a contact's TMA solution (issue 31, contacts that
+pass close; docs/equations.md "TMA-predicted bearing"; docs/decisions/026-tma-predicted-bearing.md,
+028-own-state-along-the-relative-track.md).
 
 Choice (stated; 000 predicts with its straight-line-segment model only): near a closest
-approach the bearing of a straight relative track, theta(t) = atan2(d_x, d_y) with
-d(t) = p + v (t - t_h) - o(t), moves tens of degrees per sample while 000's model
-extrapolates its last rate. A track given its contact's converged TMA solution (p, v, P of
-002 at t_h) predicts [theta, theta'] at t from it,
+approach the bearing of a straight relative track moves tens of degrees per sample while
+000's model extrapolates its last rate, and its rate estimate lags a rate that grows cycle
+after cycle. Along a straight relative track the bearing theta, its rate omega and the
+relative range rate s = r' / r obey a closed system (the scale-invariant part of modified
+polar coordinates), exact over T while the own ship holds its course:
 
-  theta = atan2(d_x, d_y),  theta' = (d_y w_x - d_x w_y) / r^2,  w = v - u (u: own velocity),
-  C = J P J' + Q_theta(T),  J = d[theta, theta'] / d[p, v],
+  theta(t0 + T) = theta_0 + atan2(omega_0 T, 1 + s T),
+  omega(t0 + T) = omega_0 / D,  D = (1 + s T)^2 + (omega_0 T)^2,
 
-Q_theta the bearing block of 000's Q over the cycle. When the range is observable the
-mean and C come from the unscented transform of (p, v; P) instead (the spread is far from
-linear near the approach). theta and theta' are invariant along d -> k d, w -> k w, the
-direction bearings alone leave open before an own-ship manoeuvre, so J P J' stays finite
-when the range is not observable.
+the relative position being r_0 [1 + s T, omega_0 T] in the line-of-sight frame of t0.
 
-When (the switch): only when the solution's own bearing change over the cycle departs from
-a constant rate by more than the track's bearing sigma, |theta_1 - theta_0 - T theta'_0| >
-sigma_theta; elsewhere 000's model predicts as before (far from the approach the two agree).
+1. A solution whose range is observable (002's solve converged, issue 31's range rule):
+   every cycle the track propagates its own [theta, omega] (x0, P0) by that system with
+   s = (d . w) / |d|^2 of the solution at t0 (d = p + v (t0 - t_h) - o(t0), w = v - u, u
+   the own velocity), mean at (x0, s), covariance F P0 F' + G G' J_s P J_s' (F, G the
+   Jacobians in x0 and s) plus the bearing block of 000's Q. Far from the approach it is
+   000's constant rate; near it the rate grows as the geometry says.
+2. Otherwise (026): only when the solution's own bearing change over the cycle departs
+   from a constant rate by more than the track's bearing sigma (near the approach), the
+   solution's own [theta, omega] at t, theta = atan2(d_x, d_y), omega = (d_y w_x - d_x w_y)
+   / |d|^2, covariance J P J' + Q, if its bearing at t agrees with 000's prediction (1 dof,
+   both covariances). theta and omega are invariant along d -> k d, w -> k w, the direction
+   bearings alone leave open, so J P J' stays finite when the range is not observable.
 
 Guards (a stale or wrong solution cannot capture a track): a solution is used for
-``max_age`` seconds after its time (RangeNoise) and only by the track number it was solved
-for (a deleted number drops it); it must be converged (002's stop rule); its predicted
-bearing sigma must be at most MAX_SIGMA; its [theta, theta'] at the previous cycle must
-agree with the track's estimate there (chi-square 99.7 %, 2 dof) and its bearing at t with
-the model's prediction (1 dof, both covariances): a solution on another contact, or one
-that drifted, fails these and the model predicts. It replaces the bearing block of the
-prediction only, and a detection must still pass the 000 gate with that covariance.
+``max_age`` seconds after its time (RangeNoise) and only by the track it was solved for (a
+reopened number drops it); it must be converged (002's stop rule); its [theta, omega] at
+t0 must agree with the track's estimate there (chi-square 99.7 %, 2 dof), so a solution of
+another contact fails; the predicted bearing sigma must be at most MAX_SIGMA. In case 1
+the solution gives the curvature only, never the track's bearing or rate, and a detection
+must still pass the 000 gate with the predicted covariance.
 """
 
 from __future__ import annotations
@@ -76,53 +82,62 @@ def bearing_and_rate(p: np.ndarray, v: np.ndarray, t_h: float, t: float,
     return np.array([theta, rate]), J
 
 
-def unscented(p: np.ndarray, v: np.ndarray, P: np.ndarray, t_h: float, t: float, own: np.ndarray,
-              own_v: np.ndarray, kappa: float = 1.0) -> tuple[np.ndarray, np.ndarray] | None:
-    """[theta, theta'] at t and its covariance by the unscented transform of (p, v; P) (the
-    2n + 1 points of sqrt((n + kappa) P)); None when P is not positive definite."""
-    n = 4
-    try:
-        L = np.linalg.cholesky((n + kappa) * P)
-    except np.linalg.LinAlgError:
-        return None
-    s0 = np.r_[p, v]
-    pts = [s0] + [s0 + L[:, i] for i in range(n)] + [s0 - L[:, i] for i in range(n)]
-    m = np.array([bearing_and_rate(q[:2], q[2:], t_h, t, own, own_v)[0] for q in pts])
-    m[:, 0] = m[0, 0] + wrap_pi(m[:, 0] - m[0, 0])
-    w = np.full(2 * n + 1, 0.5 / (n + kappa))
-    w[0] = kappa / (n + kappa)
-    mean = w @ m
-    e = m - mean
-    return mean, (w[:, None] * e).T @ e
+def rate_ratio(p: np.ndarray, v: np.ndarray, t_h: float, t0: float, own: np.ndarray,
+               own_v: np.ndarray) -> tuple[float, np.ndarray]:
+    """s = r' / r = (d . w) / |d|^2 at t0 of the solution (p, v at t_h) seen from own
+    (velocity own_v), and J_s (4,) = d s / d[p, v]."""
+    tau = t0 - t_h
+    d = p + v * tau - own
+    w = v - own_v
+    r2 = max(float(d @ d), 1e-6)
+    s = float(d @ w) / r2
+    g_d = (w - 2.0 * s * d) / r2
+    return s, np.r_[g_d, tau * g_d + d / r2]
 
 
-def curvature(m0: np.ndarray, m1: np.ndarray, T: float) -> float:
-    """The bearing change over T that a constant rate misses, theta_1 - theta_0 - T theta'_0."""
-    return float(wrap_pi(np.asarray(m1[0] - m0[0] - T * m0[1])))
+def propagate(x0: np.ndarray, s: float, T: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """[theta, omega] after T along a straight relative track from x0 = [theta_0, omega_0]
+    and s (module docstring), its Jacobian F (2, 2) in x0 and G (2,) in s."""
+    a, b = 1.0 + s * T, x0[1] * T
+    D = a * a + b * b
+    m = np.array([x0[0] + np.arctan2(b, a), x0[1] / D])
+    F = np.array([[1.0, a * T / D], [0.0, (a * a - b * b) / D**2]])
+    G = np.array([-b * T / D, -2.0 * x0[1] * a * T / D**2])
+    return m, F, G
 
 
 def predict(h: TmaHint, t0: float, o0: np.ndarray, t: float, o1: np.ndarray, x0: np.ndarray,
-            P0: np.ndarray, x1: np.ndarray, P1: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """[theta, theta'] at t and its covariance (without Q) from the hint h, for a track whose
-    [theta, theta'] was x0 (P0) at t0 and is predicted x1 (P1) at t by 000's model; own ship
-    at o0, o1 (straight between them); None where the module's switch or a guard says no."""
+            P0: np.ndarray, x1: np.ndarray, P1: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """[theta, omega] at t, its covariance (with 000's Q) and the linearised bearing
+    transition F (2, 2) for a track whose [theta, omega] was x0 (P0) at t0 and is predicted
+    x1 (P1, with Q) at t by 000's model, from the hint h (module docstring: the track's own
+    state along the solution's relative track when its range is observable, else near the
+    approach the solution's own bearing and rate); own ship at o0, o1 (straight between
+    them); None where the module's switch or a guard says no."""
     if not h.converged or h.P is None:
         return None
     p, v, P = np.array([h.x, h.y]), np.array([h.vx, h.vy]), np.asarray(h.P, float).reshape(4, 4)
     u = (o1 - o0) / (t - t0)
+    T = t - t0
+    A = np.array([[1.0, T], [0.0, 1.0]])
+    Q = P1 - A @ P0 @ A.T  # the bearing block of 000's Q (P1 = A P0 A' + Q)
     m0, J0 = bearing_and_rate(p, v, h.t, t0, o0, u)
+    c0 = J0 @ P @ J0.T
+    if not usable_covariance(c0) or not consistent(m0, c0, x0, P0):
+        return None  # a solution of another contact, or one that drifted
+    if h.usable:  # the track's own bearing and rate along the solution's relative track
+        s, Js = rate_ratio(p, v, h.t, t0, o0, u)
+        m1, F, G = propagate(x0, s, T)
+        C1 = F @ P0 @ F.T + np.outer(G, G) * max(float(Js @ P @ Js), 0.0) + Q
+        return (m1, C1, F) if usable_covariance(C1) else None
     m1, J1 = bearing_and_rate(p, v, h.t, t, o1, u)
-    if abs(curvature(m0, m1, t - t0)) <= np.sqrt(P0[0, 0]):
+    if abs(float(wrap_pi(m1[0] - m0[0] - T * m0[1]))) <= np.sqrt(P0[0, 0]):
         return None  # the model's constant rate is within its sigma: it predicts
-    c0, c1 = J0 @ P @ J0.T, J1 @ P @ J1.T
-    ut = unscented(p, v, P, h.t, t, o1, u) if h.usable else None
-    if ut is not None:
-        m1, c1 = ut
-    if not (usable_covariance(c0) and usable_covariance(c1)):
+    c1 = J1 @ P @ J1.T
+    if not usable_covariance(c1) or not consistent(m1[:1], c1[:1, :1], x1[:1], P1[:1, :1]):
         return None
-    if not consistent(m0, c0, x0, P0) or not consistent(m1[:1], c1[:1, :1], x1[:1], P1[:1, :1]):
-        return None
-    return m1, c1
+    return m1, c1 + Q, np.zeros((2, 2))
 
 
 def usable_covariance(C: np.ndarray) -> bool:

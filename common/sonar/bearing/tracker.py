@@ -13,8 +13,10 @@ time only:
      frozen tracks whose order is sure is released for the scan (deviation;
      common.sonar.bearing.pairs); a track given its contact's TMA solution (`tma_hint`)
      predicts its manoeuvre model with the range-matched noise of
-     common.sonar.bearing.range_noise and, near a closest approach, its bearing and
-     bearing rate from the solution (common.sonar.bearing.tma_prediction, both models);
+     common.sonar.bearing.range_noise and its bearing and bearing rate along the
+     solution's relative track (observable range) or, near a closest approach, from the
+     solution itself (common.sonar.bearing.tma_prediction, both models); a number reopened
+     for a new track drops its hint;
   5. Kalman update with the Joseph-form covariance (000 P(k/k)); the other frozen pairs'
      centroids from their detections (deviation; common.sonar.bearing.pairs);
      5b. with `block_estimator`, a track whose 004 flag clears resumes from the line 004's
@@ -177,8 +179,7 @@ class BearingTracker:
             x, P = predict(x, P, self._F(T), self._Q(T, q_man))  # 000 x^pre = F x, P^pre = F P F' + Q
             x[:, 0] = wrap_2pi(x[:, 0])
         if idx.size:  # the bearing block from the TMA solution (tma_prediction)
-            k, m2, C2 = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2],
-                                                       self._Q(T)[:, :2, :2])
+            k, m2, C2, _ = self.range_noise.predictions(tab.id[idx], x0, P0, x[:, :2], P[:, :2, :2])
             x, P = with_bearing(x, P, k, m2, C2)
             if k.size and self.imm is not None:
                 for j in range(xm.shape[1]):
@@ -238,6 +239,7 @@ class BearingTracker:
         unused = ~gated
         unused[cols_] = False
         opened = self._open(t, z[unused], Rd[unused])
+        self.range_noise.born(tab.id[opened], t)  # a reused number is a new track
         self._group_lines()
 
         live = tab.active_indices()

@@ -6,7 +6,8 @@ arrays (common.sonar.mht.hypotheses); its published state and covariance are the
 mixture's moments. One `MhtTracker.step` per detection list (clock cycle k -> k+1):
   1. prediction of every hypothesis, x^pre = F x, P^pre = F P F' + Q (000 F, Q); near a
      closest approach the bearing block from the contact's TMA solution
-     (common.sonar.bearing.tma_prediction; its F's bearing rows zero for the retrodiction);
+     (common.sonar.bearing.tma_prediction: the track's bearing and rate propagated along a
+     straight relative track, its linearised transition in F for the retrodiction);
   2. gate y' S^-1 y < lambda^2 per hypothesis x measurement (common.core.gating: a batched
      Mahalanobis gate with the largest R, then the exact S of each pair);
   3. new hypotheses: one missed detection plus one Kalman update per gated measurement,
@@ -167,11 +168,11 @@ class MhtTracker:
             Qm[raised] = self.process_noise(np.full(int(raised.sum()), T), q_man[raised])
         xp, Pp = predict(self.hx, self.hP, F, Qm)  # 000 x^pre = F x, P^pre = F P F' + Q
         xp[:, 0] = wrap_2pi(xp[:, 0])
-        k, m2, C2 = self.range_noise.predictions(  # the bearing block from the TMA solution
-            tr.uid[self.ht], self.hx[:, :2], self.hP[:, :2, :2], xp[:, :2], Pp[:, :2, :2], Qm[:, :2, :2])
+        k, m2, C2, Fk = self.range_noise.predictions(  # the bearing block from the TMA solution
+            tr.uid[self.ht], self.hx[:, :2], self.hP[:, :2, :2], xp[:, :2], Pp[:, :2, :2])
         xp, Pp = with_bearing(xp, Pp, k, m2, C2)
-        Fh = np.repeat(F[None], xp.shape[0], axis=0)  # per hypothesis, for the retrodiction:
-        Fh[k, :2, :] = 0.0  # a bearing block from the TMA solution does not depend on x(k-1)
+        Fh = np.repeat(F[None], xp.shape[0], axis=0)  # per hypothesis, for the retrodiction
+        Fh[k, :2, :2] = Fk  # the bearing block's linearised transition (tma_prediction)
         by_tma = self.range_noise.solved(tr.uid)  # not deleted for its bearing sigma
         pd = detection_probability(xp[:, 2], np.sqrt(Pp[:, 2, 2]), mp.p_d_max, mp.d_thr)
         hi, lj, y, S, d2 = self._gate(xp, Pp, z, Rd)
