@@ -13,8 +13,9 @@ time t (no common scan time):
      after member_misses); the range innovations of the members of confirmed tracks
      in the gate update the base's clock offset ([C1]-[C2]); a member whose equivalent
      measurement failed its test (its elementary track changed aircraft) counts a miss
-     too; an unassigned confirmed elementary track is gated on every track without a member of this base and
-     assigned by global nearest neighbour;
+     too; an unassigned confirmed elementary track is gated on every track without a
+     member of this base and assigned by global nearest neighbour (`candidate_costs`:
+     only the pairs whose range innovation alone passes the gate are tested);
   4. one batched EKF update (001 [55]-[62], common.core.kalman) of the tracks hit;
   5. bookkeeping: a cycle with updates from >= 3 bases over >= 2 receivers counts one
      hit, confirm_cycles hits confirm; deletion after coast (coast_tentative) s;
@@ -35,7 +36,7 @@ import numpy as np
 
 from common.core import kalman
 from common.core.assignment import gnn
-from common.core.gating import chi2_gate, pair_distances
+from common.core.gating import chi2_gate, pair_distances, window_pairs
 from common.core.motion import bistatic_F, bistatic_Q
 from common.core.rejection import Rejected
 from common.core.track_table import Status
@@ -47,6 +48,8 @@ from common.radar.network.duplicates import candidate_pairs, merged
 from common.radar.network.initiation import Leftovers, Sites, initiate
 from common.radar.network.params import NetworkParams
 from common.radar.network.tracks import Tracks
+
+RANGE_SLACK = 1.0 + 1e-6  # widens the range window past the rounding of d2 (step 3)
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,21 @@ class NetworkReport:
     n_bases: np.ndarray
     member: np.ndarray
     has: np.ndarray
+
+
+def candidate_costs(h: np.ndarray, A: np.ndarray, z: np.ndarray, R: np.ndarray, cand: np.ndarray,
+                    free: np.ndarray, ang: list[int], gam: float) -> np.ndarray:
+    """(C, F) d2 of tracks `cand` (predicted h, H P H' A) and measurements `free` (z, R)
+    inside the gate `gam`, inf outside (step 3). Only the pairs whose range innovation
+    alone passes are tested: y' S^-1 y >= y_r^2 / S_rr for S > 0, a window on r_b
+    (common.core.gating.window_pairs) that drops no pair the gate keeps."""
+    half = np.sqrt(RANGE_SLACK * gam * (A[cand, 0, 0] + R[free, 0, 0].max()))
+    i, j = window_pairs(h[cand, 0] - half, h[cand, 0] + half, z[free, 0])
+    _, _, d2 = pair_distances(h, A, z, R, cand[i], free[j], ang)
+    cost = np.full((cand.size, free.size), np.inf)
+    inside = d2 <= gam
+    cost[i[inside], j[inside]] = d2[inside]
+    return cost
 
 
 class NetworkFusion:
@@ -144,7 +162,7 @@ class NetworkFusion:
         xp, Pp = T.predicted(t)
         m = z.shape[1]
         rows = np.flatnonzero(eq.ok)
-        trk = np.array([T.member_of(b, int(e)) for e in tr.id[rows]], dtype=int)
+        trk = T.rows_of(b, tr.id[rows])
         mem, free = rows[trk >= 0], rows[(trk < 0) & (tr.status[rows] == Status.CONFIRMED)]
         trk = trk[trk >= 0]
         h = project(xp, self.sites.tx[b], self.sites.rx[b])[:, :m] if len(T) else np.zeros((0, m))
@@ -161,20 +179,14 @@ class NetworkFusion:
         T.count_misses(b, tr.id[mem[~hit]])
         torn = np.flatnonzero(~eq.ok & tr.updated & ~tr.ambiguous)
         T.count_misses(b, tr.id[torn[T.is_member(b, tr.id[torn])]])
-        up_t, up_r = list(trk[hit]), list(mem[hit])
+        up_t, up_r = trk[hit], mem[hit]
         cand = np.flatnonzero(~T.has_base(b))
         if free.size and cand.size:
-            ti, ji = np.repeat(cand, free.size), np.tile(free, cand.size)
-            _, _, d2f = pair_distances(h, A, z, R, ti, ji, ang)
-            cost = np.full((cand.size, free.size), np.inf)
-            cost.ravel()[d2f <= gam] = d2f[d2f <= gam]
-            r_i, c_i = gnn(cost)
-            for a, c in zip(cand[r_i], free[c_i]):
-                T.add_member(int(a), b, int(tr.id[c]))
-                up_t.append(int(a))
-                up_r.append(int(c))
-        if up_t:
-            k, r = np.array(up_t), np.array(up_r)
+            r_i, c_i = gnn(candidate_costs(h, A, z, R, cand, free, ang, gam))
+            T.add_members(cand[r_i], b, tr.id[free[c_i]])
+            up_t, up_r = np.concatenate([up_t, cand[r_i]]), np.concatenate([up_r, free[c_i]])
+        if up_t.size:
+            k, r = up_t.astype(int), up_r.astype(int)
             x, P, _, _ = kalman.ekf_update(xp[k], Pp[k], z[r], h[k], H[k], R[r], ang)
             T.updated(k, t, x, P, b)
         T.bookkeep(t)
@@ -253,9 +265,7 @@ class NetworkFusion:
             if np.isfinite(self.next_report) else t + self.p.report_period
         T = self.tracks
         x, P = T.predicted(t)
-        member = np.full((len(T), len(self.ids)), -1, dtype=np.int64)
-        for r, m in enumerate(T.members):
-            member[r, list(m)] = list(m.values())
+        member = T.member.copy()
         return [NetworkReport(t, T.id.copy(), T.status.copy(), x, P, T.n_bases(), member,
                               member >= 0)]
 

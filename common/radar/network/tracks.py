@@ -1,7 +1,11 @@
 """The global tracks of `NetworkFusion`: CV states [x vx y vy z vz], members (base,
 elementary id), exclusive (an elementary track belongs to at most one global track, a
 global track holds at most one elementary track per base), and the confirmation and
-deletion rules of docs/networks.md."""
+deletion rules of docs/networks.md.
+
+Members, their misses and the bases of each track's cycle are (N, B) columns, one per
+configured base, so that every rule is one numpy operation over the tracks (a report of
+one base touches one column), not a loop over them."""
 
 from __future__ import annotations
 
@@ -14,14 +18,23 @@ from common.core.track_table import Status
 from common.radar.geometry.bistatic import POS
 from common.radar.network.params import NetworkParams
 
+NONE = -1  # `member` of a base the track holds no elementary track of
+
+ROW_COLUMNS = ("id", "status", "x", "P", "t", "t_update", "born", "hits", "cycle_start",
+               "member", "misses", "cycle_hit")
+
 
 class Tracks:
     """Rows in ascending id; columns id, status, x, P, t (state time), t_update, born,
-    hits (qualifying cycles), cycle_start, and per row its cycle's bases and members."""
+    hits (qualifying cycles), cycle_start, and per row and base (N, B): member (the
+    elementary id held, NONE), misses (consecutive misses of that member), cycle_hit
+    (updated by that base in the current cycle)."""
 
     def __init__(self, params: NetworkParams, receiver: np.ndarray) -> None:
         self.p = params
         self.receiver = receiver
+        n_b = receiver.size
+        self.on_receiver = (receiver[:, None] == np.unique(receiver)[None]).astype(np.int64)
         self.next_id = 1
         self.id_step = 1
         self.id = np.zeros(0, dtype=np.int64)
@@ -33,67 +46,80 @@ class Tracks:
         self.born = np.zeros(0)
         self.hits = np.zeros(0, dtype=np.int64)
         self.cycle_start = np.zeros(0)
-        self.cycle_bases: list[set[int]] = []
-        self.members: list[dict[int, int]] = []
-        self.owner: dict[tuple[int, int], int] = {}  # (base, eid) -> track id
-        self.misses: dict[tuple[int, int], int] = {}
+        self.member = np.full((0, n_b), NONE, dtype=np.int64)
+        self.misses = np.zeros((0, n_b), dtype=np.int64)
+        self.cycle_hit = np.zeros((0, n_b), dtype=bool)
 
     def __len__(self) -> int:
         return int(self.id.size)
+
+    def _row(self, tid: int) -> int:
+        return int(np.searchsorted(self.id, tid))
+
+    @property
+    def owner(self) -> dict[tuple[int, int], int]:
+        """{(base, elementary id): track number} of every member (partitions)."""
+        r, b = np.nonzero(self.member != NONE)
+        return {(int(bb), int(self.member[rr, bb])): int(self.id[rr]) for rr, bb in zip(r.tolist(), b.tolist())}
+
+    @property
+    def members(self) -> list[dict[int, int]]:
+        """Per row {base: elementary id} (common.radar.network.duplicates)."""
+        return [{int(b): int(row[b]) for b in np.flatnonzero(row != NONE)} for row in self.member]
 
     def predicted(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """All tracks predicted to t (001 [51], [25]-[26])."""
         dt = np.maximum(t - self.t, 0.0)
         return kalman.predict(self.x, self.P, cv_F(dt), cv_Q(dt, self.p.q, self.p.q_z))
 
-    def _row(self, tid: int) -> int:
-        return int(np.searchsorted(self.id, tid))
-
-    def member_of(self, b: int, eid: int) -> int:
-        """Row of the track holding (b, eid), or -1."""
-        tid = self.owner.get((b, eid))
-        return -1 if tid is None else self._row(tid)
+    def rows_of(self, b: int, eids: np.ndarray) -> np.ndarray:
+        """(E,) the row of the track holding (b, eid) for each eid, or -1."""
+        eids = np.asarray(eids, dtype=np.int64)
+        col = self.member[:, b]
+        held = np.flatnonzero(col != NONE)
+        if held.size == 0 or eids.size == 0:
+            return np.full(eids.size, -1, dtype=np.int64)
+        order = held[np.argsort(col[held], kind="stable")]
+        j = np.minimum(np.searchsorted(col[order], eids), order.size - 1)
+        return np.where(col[order[j]] == eids, order[j], -1)
 
     def is_member(self, b: int, eids: np.ndarray) -> np.ndarray:
-        return np.array([(b, int(e)) in self.owner for e in eids], dtype=bool)
+        """(E,) whether (b, eid) is held by a track."""
+        return self.rows_of(b, eids) >= 0
 
     def has_base(self, b: int) -> np.ndarray:
         """(N,) tracks holding a member of base b."""
-        return np.array([b in m for m in self.members], dtype=bool)
+        return self.member[:, b] != NONE
 
     def n_bases(self) -> np.ndarray:
-        return np.array([len(m) for m in self.members], dtype=np.int64)
+        return np.sum(self.member != NONE, axis=1).astype(np.int64)
 
-    def _release(self, b: int, eid: int) -> None:
-        tid = self.owner.pop((b, eid), None)
-        self.misses.pop((b, eid), None)
-        if tid is not None:
-            self.members[self._row(tid)].pop(b, None)
+    def _release(self, rows: np.ndarray, b: int) -> None:
+        self.member[rows, b] = NONE
+        self.misses[rows, b] = 0
 
     def release_absent(self, b: int, eids: np.ndarray) -> None:
         """Members of base b whose elementary track is no longer reported."""
-        now = set(eids.tolist())
-        for key in [k for k in self.owner if k[0] == b and k[1] not in now]:
-            self._release(*key)
+        col = self.member[:, b]
+        self._release(np.flatnonzero((col != NONE) & ~np.isin(col, eids)), b)
 
     def count_misses(self, b: int, eids: np.ndarray) -> None:
         """Out-of-gate reports of members; released after member_misses in a row."""
-        for e in eids.tolist():
-            n = self.misses.get((b, e), 0) + 1
-            self.misses[(b, e)] = n
-            if n >= self.p.member_misses:
-                self._release(b, e)
+        rows = self.rows_of(b, eids)
+        rows = rows[rows >= 0]
+        self.misses[rows, b] += 1
+        self._release(rows[self.misses[rows, b] >= self.p.member_misses], b)
 
-    def add_member(self, row: int, b: int, eid: int) -> None:
-        self.members[row][b] = eid
-        self.owner[(b, eid)] = int(self.id[row])
+    def add_members(self, rows: np.ndarray, b: int, eids: np.ndarray) -> None:
+        """Rows take the elementary tracks eids of base b (neither held before)."""
+        self.member[rows, b] = eids
+        self.misses[rows, b] = 0
 
     def updated(self, rows: np.ndarray, t: float, x: np.ndarray, P: np.ndarray, b: int) -> None:
         """Rows updated at t by base b."""
         self.x[rows], self.P[rows], self.t[rows], self.t_update[rows] = x, P, t, t
-        for r in rows.tolist():
-            self.cycle_bases[r].add(b)
-            self.misses.pop((b, self.members[r][b]), None)
+        self.cycle_hit[rows, b] = True
+        self.misses[rows, b] = 0
 
     def open(self, t: float, x: np.ndarray, P: np.ndarray, members: list[tuple[int, int]]) -> None:
         """A tentative track at t with its members."""
@@ -112,18 +138,19 @@ class Tracks:
     def insert(self, tid: int, status: int, t: float, x: np.ndarray, P: np.ndarray,
                t_update: float, born: float, hits: int, members: list[tuple[int, int]]) -> None:
         """Track number tid with its state (a handed-over track), in id order; members
-        already held by another track are left out."""
+        already held by another track are left out (and a second one of a base)."""
         r = self._row(tid)
-        for name, v in (("id", tid), ("status", status), ("t", t), ("t_update", t_update),
-                        ("born", born), ("hits", hits), ("cycle_start", t)):
-            setattr(self, name, np.insert(getattr(self, name), r, v))
-        self.x = np.insert(self.x, r, x, axis=0)
-        self.P = np.insert(self.P, r, P, axis=0)
-        self.cycle_bases.insert(r, set())
-        self.members.insert(r, {})
+        n_b = self.receiver.size
+        member = np.full(n_b, NONE, dtype=np.int64)
         for b, e in members:
-            if (b, e) not in self.owner and b not in self.members[r]:
-                self.add_member(r, b, e)
+            if member[b] == NONE and self.rows_of(b, np.array([e]))[0] < 0:
+                member[b] = e
+        new = {"id": tid, "status": status, "x": x, "P": P, "t": t, "t_update": t_update,
+               "born": born, "hits": hits, "cycle_start": t, "member": member,
+               "misses": np.zeros(n_b, dtype=np.int64), "cycle_hit": np.zeros(n_b, dtype=bool)}
+        for name in ROW_COLUMNS:
+            col = getattr(self, name)
+            setattr(self, name, np.insert(col, r, np.asarray(new[name], dtype=col.dtype), axis=0))
 
     def near(self, t: float, x: np.ndarray, P: np.ndarray) -> bool:
         """A track whose predicted position is within the chi-square(3) gate of x."""
@@ -139,12 +166,12 @@ class Tracks:
         """Cycles, confirmation, coasting and deletion at t (also of a track whose
         altitude is below z_min by more than the gate: out of the volume)."""
         p = self.p
-        for r in np.flatnonzero(t - self.cycle_start >= p.cycle).tolist():
-            bs = list(self.cycle_bases[r])
-            if len(bs) >= 3 and np.unique(self.receiver[bs]).size >= 2:
-                self.hits[r] += 1
-            self.cycle_bases[r] = set()
-            self.cycle_start[r] = t
+        due = np.flatnonzero(t - self.cycle_start >= p.cycle)
+        hit = self.cycle_hit[due]
+        receivers = np.sum((hit.astype(np.int64) @ self.on_receiver) > 0, axis=1)
+        self.hits[due] += (hit.sum(axis=1) >= 3) & (receivers >= 2)
+        self.cycle_hit[due] = False
+        self.cycle_start[due] = t
         tent = self.status == Status.TENTATIVE
         self.status[tent & (self.hits >= p.confirm_cycles)] = Status.CONFIRMED
         tent = self.status == Status.TENTATIVE
@@ -160,21 +187,18 @@ class Tracks:
 
     def remove(self, dead: np.ndarray) -> None:
         """Delete the rows of mask `dead` (N,), releasing their members."""
-        for r in np.flatnonzero(dead)[::-1].tolist():
-            for b, e in list(self.members[r].items()):
-                self._release(b, e)
-            del self.cycle_bases[r], self.members[r]
+        if not dead.any():
+            return
         keep = ~dead
-        for name in ("id", "status", "x", "P", "t", "t_update", "born", "hits", "cycle_start"):
+        for name in ROW_COLUMNS:
             setattr(self, name, getattr(self, name)[keep])
 
     def absorb(self, keep: int, gone: int, t: float, x: np.ndarray, P: np.ndarray) -> None:
         """Row `keep` takes state (x, P) at t and the members of row `gone` on the bases
         it does not hold; `gone` is left for `remove`."""
-        for b, e in list(self.members[gone].items()):
-            if b not in self.members[keep]:
-                self.owner.pop((b, e), None)
-                self.misses.pop((b, e), None)
-                self.members[gone].pop(b)
-                self.add_member(keep, b, e)
+        move = np.flatnonzero((self.member[gone] != NONE) & (self.member[keep] == NONE))
+        self.member[keep, move] = self.member[gone, move]
+        self.misses[keep, move] = 0
+        self.member[gone, move] = NONE
+        self.misses[gone, move] = 0
         self.x[keep], self.P[keep], self.t[keep] = x, P, t
