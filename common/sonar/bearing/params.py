@@ -12,6 +12,7 @@ import numpy as np
 
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.core.params import (
+    INF,
     PROB_OPEN,
     Params,
     Range,
@@ -59,6 +60,14 @@ class TrackerParams(Params):
         default is not switched there (open in 027). Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes)
         the law at 2 dB gave 4 swap runs with crossing management (0 without it); the hold
         scenes (sonar_hold*) set it.
+    clutter_estimate: run the amplitude laws with the clutter level estimated online
+        (common.sonar.bearing.clutter_level: the exponentially weighted mean excess over
+        d_thr of the detections no track took, the maximum-likelihood mean of 000's
+        exponential false-level density) instead of clutter_level_db, which must then be 0.
+        Off by default: see docs/decisions/029-sonar-clutter-estimate.md.
+    clutter_prior_db: the estimate's seed (dB), worth 10 false detections.
+    clutter_window: cycles of the estimate's forgetting, lam = 1 - 1 / clutter_window.
+    clutter_bounds_db: [low, high] bounds of the estimate (dB).
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
     alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
     delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
@@ -95,6 +104,10 @@ class TrackerParams(Params):
     p_fa: float = 1e-3
     d_thr: float = 3.0
     clutter_level_db: float = 0.0
+    clutter_estimate: bool = False
+    clutter_prior_db: float = 2.0
+    clutter_window: float = 50.0
+    clutter_bounds_db: list[float] = field(default_factory=lambda: [0.5, 20.0])
     beam_spacing_deg: float = 2.0
     alpha: float = 1e-4
     beta: float = 1e-2
@@ -125,10 +138,13 @@ class TrackerParams(Params):
         "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
         "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
         "history_keep_deleted": count(0), "d_merge": non_negative("d^2"),
-        "block_window_s": non_negative("s"),
+        "block_window_s": non_negative("s"), "clutter_prior_db": positive("dB"),
+        "clutter_window": Range("cycles", 1.0, INF, "()"), "clutter_bounds_db": positive("dB"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
-        two_values("imm_sojourn_s"), ascending_pair("band_hz"),
+        two_values("imm_sojourn_s"), ascending_pair("band_hz"), ascending_pair("clutter_bounds_db"),
+        Rule(("clutter_estimate", "clutter_level_db"), lambda e, c: not (e and c > 0),
+             "clutter_estimate and clutter_level_db > 0 exclude each other (one clutter level)"),
         # T1 = ln(beta / (1 - alpha)) < T2 = ln((1 - beta) / alpha)  <=>  alpha + beta < 1
         Rule(("alpha", "beta"), lambda a, b: a + b < 1.0, "alpha + beta < 1 (delete threshold T1 below "
              "confirm threshold T2)"),
