@@ -63,9 +63,10 @@ def test_tracker_estimate_converges_and_tracks_do_not_bias_it(mu: float, contact
     assert max(abs(v / mu - 1.0) for v in late) < 0.35
 
 
-def test_settings_exclude_a_fixed_level_and_bound_the_estimate() -> None:
-    with pytest.raises(ParamError):
-        TrackerParams(clutter_estimate=True, clutter_level_db=2.0)
+def test_a_known_level_takes_precedence_and_bounds_are_checked() -> None:
     with pytest.raises(ParamError):
         TrackerParams(clutter_bounds_db=[5.0, 1.0])
-    assert BearingTracker(TrackerParams(mode="broadband"), "cylindrical", 0.01).clutter is None
+    known = TrackerParams(mode="broadband", clutter_estimate=True, clutter_level_db=2.0)
+    assert BearingTracker(known, "cylindrical", 0.01).clutter is None
+    off = TrackerParams(mode="broadband", clutter_estimate=False)
+    assert BearingTracker(off, "cylindrical", 0.01).clutter is None

@@ -63,7 +63,8 @@ class TrackerParams(Params):
     clutter_estimate: run the amplitude laws with the clutter level estimated online
         (common.sonar.bearing.clutter_level: the exponentially weighted mean excess over
         d_thr of the detections no track took, the maximum-likelihood mean of 000's
-        exponential false-level density) instead of clutter_level_db, which must then be 0.
+        exponential false-level density) when clutter_level_db is 0; a clutter_level_db > 0
+        is a known level and takes precedence (no estimate).
         Off by default: see docs/decisions/029-sonar-clutter-estimate.md.
     clutter_prior_db: the estimate's seed (dB), worth 10 false detections.
     clutter_window: cycles of the estimate's forgetting, lam = 1 - 1 / clutter_window.
@@ -143,8 +144,6 @@ class TrackerParams(Params):
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
         two_values("imm_sojourn_s"), ascending_pair("band_hz"), ascending_pair("clutter_bounds_db"),
-        Rule(("clutter_estimate", "clutter_level_db"), lambda e, c: not (e and c > 0),
-             "clutter_estimate and clutter_level_db > 0 exclude each other (one clutter level)"),
         # T1 = ln(beta / (1 - alpha)) < T2 = ln((1 - beta) / alpha)  <=>  alpha + beta < 1
         Rule(("alpha", "beta"), lambda a, b: a + b < 1.0, "alpha + beta < 1 (delete threshold T1 below "
              "confirm threshold T2)"),

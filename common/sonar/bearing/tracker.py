@@ -131,7 +131,7 @@ class BearingTracker:
         self.pair_orders = PairOrders()
         self.clutter = (ClutterLevel(p.clutter_prior_db, p.clutter_window,
                                      (p.clutter_bounds_db[0], p.clutter_bounds_db[1]))
-                        if p.clutter_estimate else None)
+                        if p.clutter_estimate and p.clutter_level_db == 0 else None)
         self.t: float | None = None
         self._next_uid = 0
         self._ml_tracks: list[MultiLineTrack] = []
