@@ -105,7 +105,7 @@ class TrackerParams(Params):
     p_fa: float = 1e-3
     d_thr: float = 3.0
     clutter_level_db: float = 0.0
-    clutter_estimate: bool = False
+    clutter_estimate: bool = True
     clutter_prior_db: float = 2.0
     clutter_window: float = 50.0
     clutter_bounds_db: list[float] = field(default_factory=lambda: [0.5, 20.0])
