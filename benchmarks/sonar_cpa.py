@@ -115,13 +115,16 @@ def rho_f(doc: dict[str, Any]) -> float:
     return float(doc["sim"]["sonar"].get("clutter", 1.0) / (2.0 * math.pi * 10.0))
 
 
-def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True) -> CpaRun:
+def run_once(path: Path, seed: int, mode: str = "gnn", feedback: bool = True,
+             tracker: dict[str, Any] | None = None) -> CpaRun:
     """One scene, one seed, one association mode in one process; feedback: the TMA solutions
-    given back to the tracker as the bearing-tracker service does (tma_hints_from)."""
+    given back to the tracker as the bearing-tracker service does (tma_hints_from); tracker:
+    [sonar.tracker] keys over the scene's."""
     cfg = load(path)
     arr = cfg.arrays[0]
     doc = tomllib.loads(path.read_text())
-    params = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode_association=mode)
+    params = replace(section(cfg, "sonar.tracker", SonarTrackerParams), mode_association=mode,
+                     **(tracker or {}))
     trk = bearing_tracker(params, replace(section(cfg, "sonar.tracker.mht", MhtParams), rho_f=rho_f(doc)),
                           arr.kind, arr.sigma0, section(cfg, "sonar.crossing", CrossingParams))
     mgr = TmaManager(arr.id)

@@ -9,7 +9,8 @@ Candidates (`CONFIGS`): association mode gnn / mht ([sonar.tracker] mode_associa
 000's erfc P_D law and level-based P_FA (clutter_level_db = the scene's false-detection
 level above the threshold, sim.sonar.clutter_snr_db, or 0: off; the multiple-hypothesis
 mode always runs its own erfc law, so it has one configuration); 004's block estimator
-(block_estimator, single-hypothesis mode only); 004 claim 6's maximum ambiguity duration
+(block_estimator, single-hypothesis mode only); the amplitude laws with the clutter
+level estimated online instead of the scene's (clutter_estimate: "+auto"); 004 claim 6's maximum ambiguity duration
 60 s or 600 s ([sonar.crossing] max_duration; single-hypothesis mode only; it applies
 where the scene file does not set it: the four sonar_x_* scenes and the close approach,
 the others set it). Mode "auto" of [sonar.tracker] is the
@@ -80,6 +81,7 @@ class Config:
     law: bool
     block: bool
     duration: float = 60.0
+    auto: bool = False
 
 
 CONFIGS = (
@@ -88,6 +90,7 @@ CONFIGS = (
     Config("gnn+law+block", "gnn", True, True),
     Config("gnn/600", "gnn", False, False, 600.0), Config("gnn+law/600", "gnn", True, False, 600.0),
     Config("gnn+block/600", "gnn", False, True, 600.0), Config("gnn+law+block/600", "gnn", True, True, 600.0),
+    Config("gnn+auto/600", "gnn", False, False, 600.0, True),
 )
 
 
@@ -95,7 +98,8 @@ def default_config() -> Config:
     """The configuration of the Params defaults."""
     p, d = SonarTrackerParams(), CrossingParams().max_duration
     return next(c for c in CONFIGS if c.mode == p.mode_association and c.block == p.block_estimator
-                and c.law == (p.clutter_level_db > 0) and (c.mode == "mht" or c.duration == d))
+                and c.law == (p.clutter_level_db > 0) and c.auto == p.clutter_estimate
+                and (c.mode == "mht" or c.duration == d))
 
 
 def scene_doc(name: str) -> dict[str, Any]:
@@ -110,7 +114,7 @@ def build(doc: dict[str, Any], cfg: Config):
     dep = parse(copy.deepcopy({k: v for k, v in doc.items() if k != "sim"}))
     sim = doc["sim"]["sonar"]
     p = replace(section(dep, "sonar.tracker", SonarTrackerParams), mode="broadband",
-                mode_association=cfg.mode, block_estimator=cfg.block,
+                mode_association=cfg.mode, block_estimator=cfg.block, clutter_estimate=cfg.auto,
                 clutter_level_db=float(sim.get("clutter_snr_db", 2.0)) if cfg.law else 0.0)
     mp = replace(section(dep, "sonar.tracker.mht", MhtParams), rho_f=sim["clutter"] / (2 * math.pi * 10.0))
     arr = dep.arrays[0]
@@ -145,7 +149,7 @@ def run_one(job: tuple[str, int, Config]) -> tuple[str, str, int, tuple[int, int
 def cycle_ms(cfg: Config, n: int = 200) -> float:
     """Median ms per cycle at n contacts (benchmarks/bearing_tracker.py's scene)."""
     p = replace(scale_scene.params(n), mode_association=cfg.mode, block_estimator=cfg.block,
-                clutter_level_db=2.0 if cfg.law else 0.0)
+                clutter_level_db=2.0 if cfg.law else 0.0, clutter_estimate=cfg.auto)
     trk = bearing_tracker(p, MhtParams(rho_f=(n / 2) / (2 * math.pi * 10.0)), "cylindrical", scale_scene.SIGMA)
     times = []
     for k, (t, brg, amp, _) in enumerate(scale_scene.scenario(n)):

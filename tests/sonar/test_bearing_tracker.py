@@ -114,7 +114,7 @@ def _run_target(brg0: float, rate: float, n: int, tracker: BearingTracker, dt: f
 
 
 def test_life_cycle_confirm_then_delete_after_misses() -> None:
-    tr = BearingTracker(replace(BB, clutter_level_db=0.0), "cylindrical", 0.01)  # constant P_D
+    tr = BearingTracker(replace(BB, clutter_level_db=0.0, clutter_estimate=False), "cylindrical", 0.01)  # constant P_D
     cycles = _run_target(2.0, 1e-4, 6, tr)
     assert not cycles[0].confirmed.any()
     assert cycles[-1].confirmed.tolist() == [True]

@@ -12,7 +12,8 @@ def test_the_default_configuration_is_the_ranked_candidate() -> None:
     """default_config() follows the Params defaults (it is what the benchmark checks)."""
     d = default_config()
     p = SonarTrackerParams()
-    assert (d.mode, d.block, d.law) == (p.mode_association, p.block_estimator, p.clutter_level_db > 0)
+    assert (d.mode, d.block, d.law, d.auto) == (p.mode_association, p.block_estimator, p.clutter_level_db > 0,
+                                                p.clutter_estimate)
     assert d.mode == "mht" or d.duration == CrossingParams().max_duration
 
 

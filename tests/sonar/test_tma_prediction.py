@@ -159,8 +159,10 @@ def test_issue_31_geometry_is_followed_through_the_approach(mode: str, seed: int
     """sonar_cpa_coarse (the issue's 60 s / 0.5 km geometry), in one process: one number,
     confirmed at >= 90 % of the samples after its confirmation, a TMA solution after the
     approach within 1.5 CRLB (measured 0.16-0.71) and NEES below 8 (1.1-7.2). Before the
-    TMA-predicted bearing (``feedback=False``: the tracker without the solutions, as before)
-    none of these runs meets the goals: the track loses the bearing at the approach."""
+    TMA-predicted bearing (``feedback=False``: the tracker without the solutions, and with
+    the constant P_D and P_FA of that time) none of these runs meets the goals: the track
+    loses the bearing at the approach. (With the estimated clutter level of decision 029,
+    gnn seeds 1 and 2 meet them without the solutions too.)"""
     sys.path.insert(0, str(REPO))
     from benchmarks.sonar_cpa import run_once
 
@@ -170,7 +172,7 @@ def test_issue_31_geometry_is_followed_through_the_approach(mode: str, seed: int
 
     r = run_once(COARSE, seed, mode)
     assert good(r), r
-    assert not good(run_once(COARSE, seed, mode, feedback=False))
+    assert not good(run_once(COARSE, seed, mode, feedback=False, tracker={"clutter_estimate": False}))
 
 
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from common.core.motion import bearing_F, bearing_freq_F, bearing_freq_Q, bearing_Q
 from common.core.params import (
+    INF,
     PROB_OPEN,
     Params,
     Range,
@@ -41,11 +42,12 @@ class TrackerParams(Params):
     imm_sojourn_s: mean sojourn times (s) of the quiet and the manoeuvre model.
     sigma_amp_db, sigma_freq_hz: measurement sigmas of level and frequency (000 R).
     p_d, p_fa: detection / false alarm probabilities per beam and cycle (000 G, dL);
-        p_d is P_D_max of the amplitude law when clutter_level_db > 0.
+        p_d is P_D_max of the amplitude law when the laws run.
     d_thr: detection threshold D_thr (dB level) of the amplitude laws.
     clutter_level_db: mean level of false detections above d_thr (dB): P_D of a track from
         its predicted amplitude (000 erfc law) and P_FA of a detection from its level
-        (bearing.model.false_alarm_probability); 0 (the default): both constant (p_d, p_fa).
+        (bearing.model.false_alarm_probability); 0 (the default): the estimated level
+        (clutter_estimate), or both constant (p_d, p_fa) when that is off.
         Off by default (benchmarks/sonar_default.py over 17 sonar scenes, 40 seeds on
         the four sonar_x_* scenes, 10 on the others; docs/decisions/023-sonar-defaults.md):
         on, at the scene's clutter level, it ranks below off on the first criterion,
@@ -56,9 +58,26 @@ class TrackerParams(Params):
         (40 seeds on the sonar_x_* scenes, 20 on the 13 others) the reason is gone: on
         ranks first, 0 unflagged swap runs for both, break runs 0 against 3 (sonar_x_amp
         0 / 2, sonar_x_three 0 / 1), false tracks 0.08 against 0.11 per 100 cycles; the
-        default is not switched there (open in 027). Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes)
-        the law at 2 dB gave 4 swap runs with crossing management (0 without it); the hold
+        laws with an estimated level are clutter_estimate (029).
+        Earlier, on sonar_cross_4dpm_uneq (50 runs through the processes) the law at
+        2 dB gave 4 swap runs with crossing management (0 without it); the hold
         scenes (sonar_hold*) set it.
+    clutter_estimate: run the amplitude laws with the clutter level estimated online
+        (common.sonar.bearing.clutter_level: the exponentially weighted mean excess over
+        d_thr of the detections no confirmed track took, the maximum-likelihood mean of 000's
+        exponential false-level density) when clutter_level_db is 0; a clutter_level_db > 0
+        is a known level and takes precedence (no estimate).
+        Off by default (docs/decisions/029-sonar-clutter-estimate.md): it ranks first in
+        benchmarks/sonar_default.py (17 sonar scenes in process, 40 seeds on the sonar_x_*
+        scenes, 20 on the others: 0 unflagged swap runs and 0 break runs, as the laws at
+        each scene's true level, against 3 break runs with both laws off; false tracks 0.07
+        per 100 cycles against 0.08 and 0.11), but through the processes
+        (tests/integration/test_crossing_integration.py, sonar_cross_4dpm_uneq, 50 runs with
+        crossing management) it gives 3 swap runs against 0 off, above that test's goal
+        (< 2.5); the other six cases there pass with it on.
+    clutter_prior_db: the estimate's seed (dB), worth 10 false detections.
+    clutter_window: cycles of the estimate's forgetting, lam = 1 - 1 / clutter_window.
+    clutter_bounds_db: [low, high] bounds of the estimate (dB).
     beam_spacing_deg: Delta Theta between adjacent beams (000 G, dL).
     alpha, beta: P(confirm a false track), P(delete a true track) (000 T1, T2).
     delete_drop: a confirmed track is deleted when L < max(L) - delete_drop.
@@ -100,6 +119,10 @@ class TrackerParams(Params):
     p_fa: float = 1e-3
     d_thr: float = 3.0
     clutter_level_db: float = 0.0
+    clutter_estimate: bool = False
+    clutter_prior_db: float = 2.0
+    clutter_window: float = 50.0
+    clutter_bounds_db: list[float] = field(default_factory=lambda: [0.5, 20.0])
     beam_spacing_deg: float = 2.0
     alpha: float = 1e-4
     beta: float = 1e-2
@@ -131,10 +154,11 @@ class TrackerParams(Params):
         "init_freq_rate_sigma": positive("Hz/s"), "band_hz": non_negative("Hz"),
         "ml_brg_tol_deg": positive("deg"), "ml_rate_tol_deg_s": positive("deg/s"),
         "history_keep_deleted": count(0), "history_as_of_cycles": count(0), "d_merge": non_negative("d^2"),
-        "block_window_s": non_negative("s"),
+        "block_window_s": non_negative("s"), "clutter_prior_db": positive("dB"),
+        "clutter_window": Range("cycles", 1.0, INF, "()"), "clutter_bounds_db": positive("dB"),
     }
     RULES: ClassVar[tuple[Rule, ...]] = (
-        two_values("imm_sojourn_s"), ascending_pair("band_hz"),
+        two_values("imm_sojourn_s"), ascending_pair("band_hz"), ascending_pair("clutter_bounds_db"),
         # T1 = ln(beta / (1 - alpha)) < T2 = ln((1 - beta) / alpha)  <=>  alpha + beta < 1
         Rule(("alpha", "beta"), lambda a, b: a + b < 1.0, "alpha + beta < 1 (delete threshold T1 below "
              "confirm threshold T2)"),

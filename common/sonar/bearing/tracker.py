@@ -52,6 +52,7 @@ from common.core.kalman import diagonal_covariances, predict, update
 from common.core.track_table import Status, TrackTable
 from common.sonar.bearing.assoc import associate
 from common.sonar.bearing.block import CrossingBlocks
+from common.sonar.bearing.clutter_level import ClutterLevel
 from common.sonar.bearing.crossing import BearingCrossing
 from common.sonar.bearing.history import BearingHistory
 from common.sonar.bearing.imm import BearingImm
@@ -128,6 +129,9 @@ class BearingTracker:
         self.history = BearingHistory(p.history_keep_deleted)
         self.range_noise = RangeNoise()
         self.pair_orders = PairOrders()
+        self.clutter = (ClutterLevel(p.clutter_prior_db, p.clutter_window,
+                                     (p.clutter_bounds_db[0], p.clutter_bounds_db[1]))
+                        if p.clutter_estimate and p.clutter_level_db == 0 else None)
         self.t: float | None = None
         self._next_uid = 0
         self._ml_tracks: list[MultiLineTrack] = []
@@ -189,10 +193,11 @@ class BearingTracker:
                 for j in range(xm.shape[1]):
                     xm[:, j], Pm[:, j] = with_bearing(xm[:, j], Pm[:, j], k, m2, C2)
         conf = tab.status[idx] == Status.CONFIRMED
+        laws = p.clutter_level_db > 0 or self.clutter is not None
+        mu = self.clutter.value if self.clutter is not None else p.clutter_level_db
         p_d = (detection_probability(x[:, 2], np.sqrt(P[:, 2, 2]), p.p_d, p.d_thr)  # 000 P_D(erfc)
-               if p.clutter_level_db > 0 else np.full(idx.size, p.p_d))
-        p_fa = (false_alarm_probability(level, p.p_fa, p.d_thr, p.clutter_level_db)
-                if p.clutter_level_db > 0 else np.full(n_det, p.p_fa))
+               if laws else np.full(idx.size, p.p_d))
+        p_fa = false_alarm_probability(level, p.p_fa, p.d_thr, mu) if laws else np.full(n_det, p.p_fa)
         rows, cols_, y, detS, d2, gated = associate(x, P, H, z, Rd, conf, p_d, p.p_d, p_fa, self.beam)
         alpha, ambiguous = np.ones(idx.size), np.zeros(idx.size, dtype=bool)
         keep = np.ones(rows.size, dtype=bool)
@@ -247,6 +252,10 @@ class BearingTracker:
 
         unused = ~gated
         unused[cols_] = False
+        if self.clutter is not None:  # the false level from the detections no confirmed track took
+            taken = np.zeros(n_det, dtype=bool)
+            taken[cols_[conf[rows]]] = True
+            self.clutter.update(level[~taken], p.d_thr)
         opened = self._open(t, z[unused], Rd[unused])
         self.range_noise.born(tab.id[opened], t)  # a reused number is a new track
         self._group_lines()
